@@ -1,0 +1,78 @@
+#ifndef MRATTLE_RIGID_BODY_MATH_H_
+#define MRATTLE_RIGID_BODY_MATH_H_
+
+/*
+ * The numerical core of M-RATTLE: the per-body position reset (a rotation solve of
+ * 3 conditions) and the velocity projection onto rigid-body motion. Free of OpenMM
+ * types so that it can be unit-tested and benchmarked on its own.
+ *
+ * Coordinates are arrays of 3N doubles (x0,y0,z0,x1,...), indexed by global atom index;
+ * a body names its atoms through an index list, so the kernel never gathers or copies.
+ */
+
+#include <Eigen/Dense>
+
+namespace MRattlePlugin {
+namespace RigidBodyMath {
+
+/** One rigid body as the core sees it: atom indices into global arrays. */
+struct BodyView {
+    const int* atoms;       // global indices of the body's atoms
+    int numAtoms;
+    const double* masses;   // per global atom index
+    double totalMass;
+    bool linear;            // collinear atoms: 5 degrees of freedom
+};
+
+/** Result of the rotation solve of one position reset. */
+struct RotationSolve {
+    Eigen::Matrix3d rotation = Eigen::Matrix3d::Identity();
+    int iterations = 0;
+    bool converged = false;
+};
+
+/** Newton iterations allowed before the solve is reported as not converged. */
+constexpr int MaxRotationIterations = 50;
+
+/** Mass-weighted centre of the body's atoms. */
+Eigen::Vector3d centerOfMass(const BodyView& body, const double* positions);
+
+/** J = sum m_i a_i a_i^T with a_i = x_i - center. The inertia tensor is tr(J) 1 - J. */
+Eigen::Matrix3d secondMoment(const BodyView& body, const double* positions, const Eigen::Vector3d& center);
+
+/**
+ * True if the second moment J describes collinear atoms: its middle eigenvalue is below
+ * 1e-12 of the largest, i.e. the atoms lie within 1e-6 of the body's length from a line.
+ * Also true for a body whose atoms all coincide (no extent at all).
+ */
+bool isLinearShape(const Eigen::Matrix3d& secondMoment);
+
+/** Rotation exp([d]x) by Rodrigues' formula (series near zero). */
+Eigen::Matrix3d rotationFromVector(const Eigen::Vector3d& d);
+
+/**
+ * Solve r(P) = vex(P J - J P^T) - vex(Y - Y^T) = 0 for P in SO(3) by Newton on a left
+ * perturbation, starting at P = 1: zero torque of the constraint displacement about the
+ * old positions. J: second moment at the old positions; Y = sum m_i y_i a_i^T.
+ * Not for linear bodies (the Jacobian is singular there; see resetBodyPositions).
+ */
+RotationSolve solveResetRotation(const Eigen::Matrix3d& J, const Eigen::Matrix3d& Y);
+
+/**
+ * M-RATTLE position reset of one body. oldPositions holds x at the start of the step;
+ * newPositions holds the unconstrained drift y* on entry and the reset positions
+ * c_new + P (x_i - c_old) on exit (only the body's atoms are touched).
+ */
+RotationSolve resetBodyPositions(const BodyView& body, const double* oldPositions, double* newPositions);
+
+/**
+ * RATTLE's velocity step for one body: replace the body's atom velocities by their
+ * mass-weighted projection onto rigid-body motion at the given positions,
+ * v_i = V + w x a_i with V the centre-of-mass velocity and w = I^-1 L.
+ */
+void projectBodyVelocities(const BodyView& body, const double* positions, double* velocities);
+
+} // namespace RigidBodyMath
+} // namespace MRattlePlugin
+
+#endif

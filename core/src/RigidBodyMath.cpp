@@ -1,0 +1,228 @@
+#include "mrattle/RigidBodyMath.h"
+#include <cmath>
+#include <limits>
+
+using Eigen::Map;
+using Eigen::Matrix3d;
+using Eigen::Vector3d;
+
+namespace MRattlePlugin {
+namespace RigidBodyMath {
+
+namespace {
+
+Map<const Vector3d> point(const double* array, int atom) {
+    return Map<const Vector3d>(array + 3 * atom);
+}
+
+Map<Vector3d> point(double* array, int atom) {
+    return Map<Vector3d>(array + 3 * atom);
+}
+
+Vector3d vexOfSkewPart(const Matrix3d& A) {
+    // vex(A - A^T)
+    return Vector3d(A(2, 1) - A(1, 2), A(0, 2) - A(2, 0), A(1, 0) - A(0, 1));
+}
+
+Matrix3d crossMatrix(const Vector3d& w) {
+    Matrix3d m;
+    m << 0, -w.z(), w.y(),
+         w.z(), 0, -w.x(),
+         -w.y(), w.x(), 0;
+    return m;
+}
+
+/** Unit vector along a linear body: the direction of its atom farthest from the centre. */
+Vector3d linearAxis(const BodyView& body, const double* positions, const Vector3d& center) {
+    Vector3d farthest = Vector3d::Zero();
+    for (int k = 0; k < body.numAtoms; k++) {
+        Vector3d a = point(positions, body.atoms[k]) - center;
+        if (a.squaredNorm() > farthest.squaredNorm())
+            farthest = a;
+    }
+    double length = farthest.norm();
+    return length > 0 ? Vector3d(farthest / length) : Vector3d(1, 0, 0);
+}
+
+/** The smallest rotation taking unit vector u onto unit vector p (u != -p). */
+Matrix3d rotationBetween(const Vector3d& u, const Vector3d& p) {
+    Vector3d k = u.cross(p);
+    double c = u.dot(p);
+    Matrix3d K = crossMatrix(k);
+    return Matrix3d::Identity() + K + K * K / (1.0 + c);
+}
+
+/**
+ * Linear body: the condition u x (j p - w) = 0 (u the old axis, p = P u the new one,
+ * w = sum m_i s_i y_i, j = sum m_i s_i^2) has the closed form p = (w + lambda u) / j
+ * with |p| = 1; spin about the axis is no degree of freedom, so P is the smallest
+ * rotation taking u to p.
+ */
+RotationSolve solveLinearRotation(const BodyView& body, const double* oldPositions, const double* newPositions,
+                                  const Vector3d& oldCenter, const Vector3d& newCenter) {
+    RotationSolve result;
+    Vector3d u = linearAxis(body, oldPositions, oldCenter);
+    Vector3d w = Vector3d::Zero();
+    double j = 0;
+    for (int k = 0; k < body.numAtoms; k++) {
+        int atom = body.atoms[k];
+        double m = body.masses[atom];
+        double s = (point(oldPositions, atom) - oldCenter).dot(u);
+        w += (m * s) * (point(newPositions, atom) - newCenter);
+        j += m * s * s;
+    }
+    result.iterations = 1;
+    if (j == 0) {   // all atoms at the centre: nothing to rotate
+        result.converged = true;
+        return result;
+    }
+    double uw = u.dot(w);
+    double discriminant = uw * uw - w.squaredNorm() + j * j;
+    if (discriminant < 0)
+        return result;  // no rotation satisfies the condition: step far too large
+    Vector3d p = (w + (-uw + std::sqrt(discriminant)) * u) / j;
+    p.normalize();
+    if (u.dot(p) <= -1.0 + 1e-12)
+        return result;
+    result.rotation = rotationBetween(u, p);
+    result.converged = true;
+    return result;
+}
+
+} // namespace
+
+Vector3d centerOfMass(const BodyView& body, const double* positions) {
+    Vector3d sum = Vector3d::Zero();
+    for (int k = 0; k < body.numAtoms; k++)
+        sum += body.masses[body.atoms[k]] * point(positions, body.atoms[k]);
+    return sum / body.totalMass;
+}
+
+Matrix3d secondMoment(const BodyView& body, const double* positions, const Vector3d& center) {
+    Matrix3d J = Matrix3d::Zero();
+    for (int k = 0; k < body.numAtoms; k++) {
+        Vector3d a = point(positions, body.atoms[k]) - center;
+        J.noalias() += body.masses[body.atoms[k]] * a * a.transpose();
+    }
+    return J;
+}
+
+bool isLinearShape(const Matrix3d& secondMoment) {
+    Eigen::SelfAdjointEigenSolver<Matrix3d> solver(secondMoment, Eigen::EigenvaluesOnly);
+    const Vector3d& ev = solver.eigenvalues();  // ascending
+    return ev(1) <= 1e-12 * ev(2);
+}
+
+Matrix3d rotationFromVector(const Vector3d& d) {
+    double theta2 = d.squaredNorm();
+    Matrix3d D = crossMatrix(d);
+    double a, b;  // sin(t)/t and (1-cos(t))/t^2
+    if (theta2 < 1e-8) {
+        a = 1.0 - theta2 / 6.0 + theta2 * theta2 / 120.0;
+        b = 0.5 - theta2 / 24.0 + theta2 * theta2 / 720.0;
+    } else {
+        double theta = std::sqrt(theta2);
+        a = std::sin(theta) / theta;
+        b = (1.0 - std::cos(theta)) / theta2;
+    }
+    return Matrix3d::Identity() + a * D + b * D * D;
+}
+
+RotationSolve solveResetRotation(const Matrix3d& J, const Matrix3d& Y) {
+    RotationSolve result;
+    const Vector3d target = vexOfSkewPart(Y);
+    // |r| ~ tr(J) * (angle error): stop once the angle is at round-off.
+    const double scale = J.trace();
+    const double tolerance = 64 * std::numeric_limits<double>::epsilon() * scale;
+    Matrix3d& P = result.rotation;
+    for (int iteration = 0; iteration <= MaxRotationIterations; iteration++) {
+        Matrix3d PJ = P * J;
+        Vector3d r = vexOfSkewPart(PJ) - target;
+        if (r.norm() <= tolerance || scale == 0) {
+            result.iterations = iteration;
+            result.converged = true;
+            return result;
+        }
+        if (iteration == MaxRotationIterations)
+            break;
+        Matrix3d K = PJ.trace() * Matrix3d::Identity() - PJ;
+        Vector3d d = -K.inverse() * r;
+        if (!d.allFinite())
+            break;
+        P = rotationFromVector(d) * P;
+        if (d.norm() < 1e-15) {  // the update no longer changes P: at round-off
+            result.iterations = iteration + 1;
+            result.converged = true;
+            return result;
+        }
+    }
+    result.iterations = MaxRotationIterations;
+    return result;
+}
+
+RotationSolve resetBodyPositions(const BodyView& body, const double* oldPositions, double* newPositions) {
+    const Vector3d oldCenter = centerOfMass(body, oldPositions);
+    const Vector3d newCenter = centerOfMass(body, newPositions);
+    RotationSolve solve;
+    if (body.linear)
+        solve = solveLinearRotation(body, oldPositions, newPositions, oldCenter, newCenter);
+    else {
+        Matrix3d J = Matrix3d::Zero();
+        Matrix3d Y = Matrix3d::Zero();
+        for (int k = 0; k < body.numAtoms; k++) {
+            int atom = body.atoms[k];
+            double m = body.masses[atom];
+            Vector3d a = point(oldPositions, atom) - oldCenter;
+            Vector3d ma = m * a;
+            J.noalias() += ma * a.transpose();
+            Y.noalias() += (point(newPositions, atom) - newCenter) * ma.transpose();
+        }
+        solve = solveResetRotation(J, Y);
+    }
+    const Matrix3d& P = solve.rotation;
+    for (int k = 0; k < body.numAtoms; k++) {
+        int atom = body.atoms[k];
+        point(newPositions, atom) = newCenter + P * (point(oldPositions, atom) - oldCenter);
+    }
+    return solve;
+}
+
+void projectBodyVelocities(const BodyView& body, const double* positions, double* velocities) {
+    Vector3d massPosition = Vector3d::Zero();
+    Vector3d momentum = Vector3d::Zero();
+    for (int k = 0; k < body.numAtoms; k++) {
+        int atom = body.atoms[k];
+        double m = body.masses[atom];
+        massPosition += m * point(positions, atom);
+        momentum += m * point(velocities, atom);
+    }
+    const Vector3d center = massPosition / body.totalMass;
+    const Vector3d V = momentum / body.totalMass;
+    // L about the centre; sum m_i a_i = 0, so using v_i instead of v_i - V is exact.
+    Matrix3d J = Matrix3d::Zero();
+    Vector3d L = Vector3d::Zero();
+    for (int k = 0; k < body.numAtoms; k++) {
+        int atom = body.atoms[k];
+        double m = body.masses[atom];
+        Vector3d a = point(positions, atom) - center;
+        J.noalias() += (m * a) * a.transpose();
+        L += m * a.cross(point(velocities, atom));
+    }
+    Vector3d omega;
+    if (body.linear) {
+        // I = j (1 - u u^T): no spin about the axis.
+        Vector3d u = linearAxis(body, positions, center);
+        double j = J.trace();
+        omega = j > 0 ? Vector3d((L - L.dot(u) * u) / j) : Vector3d::Zero();
+    } else {
+        Matrix3d inertia = J.trace() * Matrix3d::Identity() - J;
+        omega = inertia.inverse() * L;
+    }
+    for (int k = 0; k < body.numAtoms; k++) {
+        int atom = body.atoms[k];
+        point(velocities, atom) = V + omega.cross(point(positions, atom) - center);
+    }
+}
+
+} // namespace RigidBodyMath
+} // namespace MRattlePlugin

@@ -1,0 +1,84 @@
+#ifndef MRATTLE_RIGID_BODY_SET_H_
+#define MRATTLE_RIGID_BODY_SET_H_
+
+#include "mrattle/RigidBodyMath.h"
+#include "openmm/System.h"
+#include "openmm/Vec3.h"
+#include "internal/windowsExportMRattle.h"
+#include <vector>
+
+namespace MRattlePlugin {
+
+/**
+ * The one home of rigid-body bookkeeping, shared by every rigid-body integrator and
+ * kernel: which particles form each body, which particles are free, which constraints
+ * must still be enforced, the body shapes (linear or not) and the degrees of freedom.
+ *
+ * Body semantics: with no explicit bodies, every molecule (OpenMM's connected components
+ * of bonds and constraints) with two or more massive, non-virtual particles is a body.
+ * With explicit bodies, only those are rigid. A body of one particle is a free particle.
+ * Virtual sites and massless particles are never body members.
+ */
+class OPENMM_EXPORT_MRATTLE RigidBodySet {
+public:
+    RigidBodySet() = default;
+    /**
+     * Resolve the bodies of a System. Throws OpenMMException naming the body and
+     * particle for: an index out of range, a particle listed twice, a massless particle
+     * or virtual site listed as a member, a constraint joining a body to a particle
+     * outside it.
+     *
+     * @param explicitBodies  bodies added to the integrator (empty: use the molecules)
+     * @param molecules       the System's molecules, as ContextImpl::getMolecules()
+     */
+    RigidBodySet(const OpenMM::System& system, const std::vector<std::vector<int> >& explicitBodies,
+                 const std::vector<std::vector<int> >& molecules);
+
+    /** Check one explicit body on its own (at addRigidBody time): not empty, no negative index, no repeat. */
+    static void checkBodyDefinition(int bodyIndex, const std::vector<int>& particles);
+
+    int getNumBodies() const { return bodies.size(); }
+    const std::vector<std::vector<int> >& getBodies() const { return bodies; }
+    const std::vector<int>& getBodyParticles(int body) const { return bodies[body]; }
+    /** The body a particle belongs to, or -1 for a free particle, massless particle or virtual site. */
+    int getBodyOfParticle(int particle) const { return bodyOfParticle[particle]; }
+    /** Massive, non-virtual particles that belong to no body. */
+    const std::vector<int>& getFreeParticles() const { return freeParticles; }
+    /** Indices of the System's constraints between free particles (enforced RATTLE-style). */
+    const std::vector<int>& getFreeConstraints() const { return freeConstraints; }
+    /** Number of System constraints with both ends in one body (ignored: redundant). */
+    int getNumIgnoredConstraints() const { return ignoredConstraints; }
+    double getBodyMass(int body) const { return bodyMass[body]; }
+    bool isLinear(int body) const { return linear[body] != 0; }
+    /** True if the System has a CMMotionRemover (it removes 3 degrees of freedom). */
+    bool removesCenterOfMassMotion() const { return hasCMMotionRemover; }
+
+    /** Classify each body's shape (linear or not) from the given positions. */
+    void updateShapes(const std::vector<OpenMM::Vec3>& positions);
+
+    /** 6 per body (5 if linear), 3 per free particle, minus free constraints, minus 3 with a CMMotionRemover. */
+    int getNumDegreesOfFreedom() const;
+
+    /** The numerical core's view of one body. */
+    RigidBodyMath::BodyView view(int body) const {
+        return RigidBodyMath::BodyView{bodies[body].data(), (int) bodies[body].size(), masses.data(),
+                                       bodyMass[body], linear[body] != 0};
+    }
+    /** Particle masses, indexed by particle. */
+    const std::vector<double>& getMasses() const { return masses; }
+
+private:
+    std::vector<std::vector<int> > bodies;
+    std::vector<int> bodyOfParticle;
+    std::vector<int> freeParticles;
+    std::vector<int> freeConstraints;
+    std::vector<double> masses;
+    std::vector<double> bodyMass;
+    std::vector<char> linear;
+    int ignoredConstraints = 0;
+    bool hasCMMotionRemover = false;
+};
+
+} // namespace MRattlePlugin
+
+#endif

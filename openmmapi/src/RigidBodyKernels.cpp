@@ -1,0 +1,9 @@
+#include "internal/RigidBodyKernels.h"
+
+// Key functions: the kernel interfaces' vtables and type information live in this
+// library only, so Kernel::getAs<> casts agree across the plugin's shared libraries.
+MRattlePlugin::RigidBodyKernel::~RigidBodyKernel() {
+}
+
+MRattlePlugin::IntegrateMRattleStepKernel::~IntegrateMRattleStepKernel() {
+}

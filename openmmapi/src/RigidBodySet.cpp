@@ -1,0 +1,138 @@
+#include "RigidBodySet.h"
+#include "openmm/CMMotionRemover.h"
+#include "openmm/OpenMMException.h"
+#include <set>
+#include <sstream>
+
+using namespace MRattlePlugin;
+using namespace OpenMM;
+using std::vector;
+
+namespace {
+
+std::string describeBody(int body) {
+    return "Rigid body " + std::to_string(body);
+}
+
+void fail(const std::string& message) {
+    throw OpenMMException(message);
+}
+
+} // namespace
+
+void RigidBodySet::checkBodyDefinition(int bodyIndex, const vector<int>& particles) {
+    if (particles.empty())
+        fail(describeBody(bodyIndex) + " is empty: a rigid body needs at least one particle");
+    std::set<int> seen;
+    for (int particle : particles) {
+        if (particle < 0)
+            fail(describeBody(bodyIndex) + " lists particle " + std::to_string(particle) + ": particle indices cannot be negative");
+        if (!seen.insert(particle).second)
+            fail(describeBody(bodyIndex) + " lists particle " + std::to_string(particle) + " twice");
+    }
+}
+
+RigidBodySet::RigidBodySet(const System& system, const vector<vector<int> >& explicitBodies,
+                           const vector<vector<int> >& molecules) {
+    const int numParticles = system.getNumParticles();
+    masses.resize(numParticles);
+    for (int i = 0; i < numParticles; i++)
+        masses[i] = system.getParticleMass(i);
+    auto isMassive = [&](int i) { return masses[i] != 0.0 && !system.isVirtualSite(i); };
+
+    vector<vector<int> > candidates;
+    if (explicitBodies.empty()) {
+        // Molecules, taken without virtual sites and massless particles.
+        for (const vector<int>& molecule : molecules) {
+            vector<int> members;
+            for (int i : molecule)
+                if (isMassive(i))
+                    members.push_back(i);
+            candidates.push_back(members);
+        }
+    } else {
+        vector<int> ownerBody(numParticles, -1);
+        for (int b = 0; b < (int) explicitBodies.size(); b++) {
+            checkBodyDefinition(b, explicitBodies[b]);
+            for (int i : explicitBodies[b]) {
+                if (i >= numParticles)
+                    fail(describeBody(b) + " lists particle " + std::to_string(i) + ", but the System has only " +
+                         std::to_string(numParticles) + " particles");
+                if (system.isVirtualSite(i))
+                    fail(describeBody(b) + " lists particle " + std::to_string(i) +
+                         ", which is a virtual site: virtual sites follow their parents and cannot be body members");
+                if (masses[i] == 0.0)
+                    fail(describeBody(b) + " lists particle " + std::to_string(i) +
+                         ", which has zero mass: massless particles cannot be body members");
+                if (ownerBody[i] != -1)
+                    fail("Particle " + std::to_string(i) + " is listed in rigid bodies " + std::to_string(ownerBody[i]) +
+                         " and " + std::to_string(b) + ": a particle can belong to one body only");
+                ownerBody[i] = b;
+            }
+        }
+        candidates = explicitBodies;
+    }
+
+    // Bodies of one particle are free particles.
+    bodyOfParticle.assign(numParticles, -1);
+    vector<int> definitionIndex;  // index of each body among those the user added (or the molecules)
+    for (int d = 0; d < (int) candidates.size(); d++) {
+        const vector<int>& members = candidates[d];
+        if (members.size() < 2)
+            continue;
+        definitionIndex.push_back(d);
+        int index = bodies.size();
+        double total = 0;
+        for (int i : members) {
+            bodyOfParticle[i] = index;
+            total += masses[i];
+        }
+        bodies.push_back(members);
+        bodyMass.push_back(total);
+    }
+    linear.assign(bodies.size(), 0);
+    for (int i = 0; i < numParticles; i++)
+        if (bodyOfParticle[i] == -1 && isMassive(i))
+            freeParticles.push_back(i);
+
+    for (int c = 0; c < system.getNumConstraints(); c++) {
+        int p1, p2;
+        double distance;
+        system.getConstraintParameters(c, p1, p2, distance);
+        int b1 = bodyOfParticle[p1], b2 = bodyOfParticle[p2];
+        if (b1 == b2 && b1 != -1)
+            ignoredConstraints++;
+        else if (b1 == -1 && b2 == -1)
+            freeConstraints.push_back(c);
+        else {
+            int inside = (b1 != -1 ? p1 : p2), outside = (b1 != -1 ? p2 : p1);
+            int body = definitionIndex[b1 != -1 ? b1 : b2];
+            fail("Constraint " + std::to_string(c) + " joins particle " + std::to_string(inside) + " of rigid body " +
+                 std::to_string(body) + " to particle " + std::to_string(outside) +
+                 " outside that body: constraints may join particles of one body or free particles only");
+        }
+    }
+
+    for (int f = 0; f < system.getNumForces(); f++)
+        if (dynamic_cast<const CMMotionRemover*>(&system.getForce(f)) != nullptr)
+            hasCMMotionRemover = true;
+}
+
+void RigidBodySet::updateShapes(const vector<Vec3>& positions) {
+    static_assert(sizeof(Vec3) == 3 * sizeof(double), "Vec3 must be three packed doubles");
+    const double* data = reinterpret_cast<const double*>(positions.data());
+    for (int b = 0; b < (int) bodies.size(); b++) {
+        RigidBodyMath::BodyView body = view(b);
+        Eigen::Vector3d center = RigidBodyMath::centerOfMass(body, data);
+        linear[b] = RigidBodyMath::isLinearShape(RigidBodyMath::secondMoment(body, data, center));
+    }
+}
+
+int RigidBodySet::getNumDegreesOfFreedom() const {
+    int dof = 3 * (int) freeParticles.size() - (int) freeConstraints.size();
+    for (char isLinearBody : linear)
+        dof += isLinearBody ? 5 : 6;
+    if (hasCMMotionRemover)
+        dof -= 3;
+    return dof;
+}

@@ -1,0 +1,34 @@
+#include "ReferenceMRattleKernelFactory.h"
+#include "ReferenceMRattleKernels.h"
+#include "openmm/OpenMMException.h"
+#include "openmm/Platform.h"
+#include "openmm/internal/windowsExport.h"
+
+using namespace MRattlePlugin;
+using namespace OpenMM;
+
+KernelImpl* ReferenceMRattleKernelFactory::createKernelImpl(std::string name, const Platform& platform,
+                                                            ContextImpl& context) const {
+    if (name == IntegrateMRattleStepKernel::Name())
+        return new ReferenceIntegrateMRattleStepKernel(name, platform);
+    throw OpenMMException("ReferenceMRattleKernelFactory: no kernel named '" + name + "'");
+}
+
+extern "C" OPENMM_EXPORT void registerPlatforms() {
+}
+
+/** OpenMM's plugin entry point: register the kernels on every Reference-derived platform present. */
+extern "C" OPENMM_EXPORT void registerKernelFactories() {
+    for (int i = 0; i < Platform::getNumPlatforms(); i++) {
+        Platform& platform = Platform::getPlatform(i);
+        if (platform.getName() == "Reference" || platform.getName() == "CPU") {
+            // One factory per platform: each Platform deletes the factories it holds.
+            ReferenceMRattleKernelFactory* factory = new ReferenceMRattleKernelFactory();
+            platform.registerKernelFactory(IntegrateMRattleStepKernel::Name(), factory);
+        }
+    }
+}
+
+extern "C" OPENMM_EXPORT void registerMRattleReferenceKernelFactories() {
+    registerKernelFactories();
+}

@@ -1,0 +1,71 @@
+#include "ReferenceMRattleKernels.h"
+#include "MRattleIntegrator.h"
+#include "openmm/OpenMMException.h"
+#include "openmm/reference/ReferenceVirtualSites.h"
+
+using namespace MRattlePlugin;
+using namespace OpenMM;
+using std::vector;
+
+void ReferenceIntegrateMRattleStepKernel::initialize(const System& system, const RigidBodySet& bodies) {
+    dynamics.reset(new ReferenceRigidBodyDynamics(system, bodies));
+    newPositions.resize(system.getNumParticles());
+}
+
+void ReferenceIntegrateMRattleStepKernel::projectVelocities(ContextImpl& context, vector<Vec3>& velocities,
+                                                           double tolerance) {
+    dynamics->projectVelocities(ReferenceRigidBodyDynamics::positions(context), velocities, tolerance);
+}
+
+void ReferenceIntegrateMRattleStepKernel::projectContextVelocities(ContextImpl& context, double tolerance) {
+    projectVelocities(context, ReferenceRigidBodyDynamics::velocities(context), tolerance);
+}
+
+double ReferenceIntegrateMRattleStepKernel::computeKineticEnergy(ContextImpl& context) {
+    return dynamics->kineticEnergy(ReferenceRigidBodyDynamics::velocities(context));
+}
+
+void ReferenceIntegrateMRattleStepKernel::integratePositions(ContextImpl& context, const MRattleIntegrator& integrator) {
+    vector<Vec3>& x = ReferenceRigidBodyDynamics::positions(context);
+    vector<Vec3>& v = ReferenceRigidBodyDynamics::velocities(context);
+    const vector<Vec3>& f = ReferenceRigidBodyDynamics::forces(context);
+    const vector<double>& inverseMass = dynamics->inverseMasses();
+    const double h = integrator.getStepSize();
+    const int n = x.size();
+
+    // Half kick and drift into a buffer: the Context is only written once every body's
+    // reset has succeeded, so a failed step leaves it as it was.
+    for (int i = 0; i < n; i++)
+        newPositions[i] = (inverseMass[i] != 0 ? x[i] + (v[i] + f[i] * (0.5 * h * inverseMass[i])) * h : x[i]);
+    dynamics->constrainFreePositions(x, newPositions, integrator.getConstraintTolerance());
+    const RigidBodySet& bodies = dynamics->bodies();
+    for (int b = 0; b < bodies.getNumBodies(); b++) {
+        RigidBodyMath::RotationSolve solve =
+            RigidBodyMath::resetBodyPositions(bodies.view(b), coordinates(x), coordinates(newPositions));
+        if (!solve.converged)
+            throw OpenMMException("MRattleIntegrator: the position reset of rigid body " + std::to_string(b) +
+                                  " found no rotation in " + std::to_string(RigidBodyMath::MaxRotationIterations) +
+                                  " Newton iterations; the step size is too large for the forces, or they are not finite");
+    }
+    const double inverseStep = 1.0 / h;
+    for (int i = 0; i < n; i++) {
+        if (inverseMass[i] != 0) {
+            v[i] = (newPositions[i] - x[i]) * inverseStep;
+            x[i] = newPositions[i];
+        }
+    }
+    ReferenceVirtualSites::computePositions(dynamics->system(), x);
+}
+
+void ReferenceIntegrateMRattleStepKernel::integrateVelocities(ContextImpl& context, const MRattleIntegrator& integrator) {
+    vector<Vec3>& x = ReferenceRigidBodyDynamics::positions(context);
+    vector<Vec3>& v = ReferenceRigidBodyDynamics::velocities(context);
+    const vector<Vec3>& f = ReferenceRigidBodyDynamics::forces(context);
+    const vector<double>& inverseMass = dynamics->inverseMasses();
+    const double halfStep = 0.5 * integrator.getStepSize();
+    for (size_t i = 0; i < v.size(); i++)
+        if (inverseMass[i] != 0)
+            v[i] += f[i] * (halfStep * inverseMass[i]);
+    dynamics->projectVelocities(x, v, integrator.getConstraintTolerance());
+    ReferenceRigidBodyDynamics::advanceClock(context, integrator.getStepSize());
+}

@@ -1,0 +1,9 @@
+#!/usr/bin/env bash
+# Configure and build into ./build (or $MRATTLE_BUILD_DIR). Installs missing packages first.
+set -euo pipefail
+root="$(cd "$(dirname "$0")/.." && pwd)"
+"$root/scripts/install-deps.sh"
+build="${MRATTLE_BUILD_DIR:-$root/build}"
+cmake -S "$root" -B "$build" -DCMAKE_BUILD_TYPE=Release -DPython3_EXECUTABLE=/usr/bin/python3 > "$build.cmake.log" 2>&1 || {
+    cat "$build.cmake.log"; exit 1; }
+cmake --build "$build" -j"$(nproc)"
