@@ -1,0 +1,47 @@
+"""M-RATTLE rigid-body integrators for OpenMM.
+
+``import mrattle`` registers the plugin's kernels with OpenMM's Reference and CPU
+platforms, so ``mrattle.MRattleIntegrator`` can be used anywhere an OpenMM integrator
+can::
+
+    import mrattle
+    from openmm.unit import femtoseconds
+    integrator = mrattle.MRattleIntegrator(2*femtoseconds)
+    simulation = openmm.app.Simulation(topology, system, integrator)
+
+The package also holds a StateDataReporter that reports the rigid-body temperature,
+a helper that removes interactions inside rigid bodies, and builders of test systems.
+"""
+import os as _os
+
+import openmm as _openmm
+
+from . import _plugin_location
+
+
+def _loadKernelPlugin():
+    """Load the kernel plugin (Reference and CPU kernels) unless OpenMM already did."""
+    path = _os.path.normpath(_os.path.join(_os.path.dirname(_os.path.abspath(__file__)),
+                                           _plugin_location.PLUGIN_PATH))
+    # Installed into OpenMM's own plugin folder, 'import openmm' has loaded it already:
+    # registering the kernels twice would be harmless but wasteful.
+    loaded = getattr(_openmm, 'pluginLoadedLibNames', [])
+    if any(_os.path.realpath(name) == _os.path.realpath(path) for name in loaded):
+        return path
+    if not _os.path.isfile(path):
+        raise ImportError("mrattle: the kernel plugin is missing: expected %s" % path)
+    try:
+        _openmm.Platform.loadPluginLibrary(path)
+    except Exception as error:
+        raise ImportError("mrattle: OpenMM could not load the kernel plugin %s: %s" % (path, error)) from error
+    return path
+
+
+# The SWIG module first: it loads libMRattlePlugin.so, which the kernel plugin needs.
+from .integrators import RigidBodyIntegrator, MRattleIntegrator
+
+PLUGIN_PATH = _loadKernelPlugin()
+
+
+__all__ = ['RigidBodyIntegrator', 'MRattleIntegrator', 'StateDataReporter', 'removeIntraBodyInteractions',
+           'models', 'PLUGIN_PATH']

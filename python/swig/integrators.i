@@ -1,0 +1,119 @@
+/*
+ * SWIG interface of the plugin's integrators (Python module mrattle.integrators).
+ *
+ * The classes derive from OpenMM's Python class openmm.Integrator: SWIG's shared runtime
+ * type table (do not define SWIG_TYPE_TABLE) lets openmm.Context accept them, and the
+ * inherited getStepSize()/setStepSize() handle units as for OpenMM's integrators.
+ * To wrap another RigidBodyIntegrator subclass, add it at the end with MRATTLE_INTEGRATOR.
+ */
+%module(package="mrattle", docstring="SWIG wrappers of the M-RATTLE plugin's integrators.") integrators
+
+%pythonbegin %{
+from openmm import unit
+%}
+
+%import(module="openmm") "openmm_base.i"
+
+%{
+#include "MRattleIntegrator.h"
+#include <climits>
+#include <exception>
+#include <vector>
+
+/* C++ exceptions reach Python as openmm.OpenMMException, as with OpenMM's own wrappers. */
+static void raiseOpenMMException(const char* message) {
+    PyObject* module = PyImport_ImportModule("openmm");
+    PyObject* type = module != NULL ? PyObject_GetAttrString(module, "OpenMMException") : NULL;
+    Py_XDECREF(module);
+    if (type == NULL) {
+        PyErr_Clear();
+        PyErr_SetString(PyExc_RuntimeError, message);
+        return;
+    }
+    PyErr_SetString(type, message);
+    Py_DECREF(type);
+}
+%}
+
+%exception {
+    try {
+        $action
+    } catch (const std::exception& e) {
+        raiseOpenMMException(e.what());
+        SWIG_fail;
+    } catch (...) {
+        raiseOpenMMException("unknown C++ exception");
+        SWIG_fail;
+    }
+}
+
+/* Particle lists: any iterable of integers in, Python lists out. */
+%typemap(in) const std::vector<int>& (std::vector<int> values) {
+    PyObject* iterator = PyObject_GetIter($input);
+    if (iterator == NULL) {
+        PyErr_Clear();
+        SWIG_exception_fail(SWIG_TypeError, "in method '$symname', expected a sequence of particle indices");
+    }
+    PyObject* item;
+    while ((item = PyIter_Next(iterator)) != NULL) {
+        long value = PyLong_AsLong(item);
+        Py_DECREF(item);
+        if (value == -1 && PyErr_Occurred()) {
+            Py_DECREF(iterator);
+            PyErr_Clear();
+            SWIG_exception_fail(SWIG_TypeError, "in method '$symname', particle indices must be integers");
+        }
+        if (value < INT_MIN || value > INT_MAX) {
+            Py_DECREF(iterator);
+            SWIG_exception_fail(SWIG_OverflowError, "in method '$symname', particle index out of range of int");
+        }
+        values.push_back((int) value);
+    }
+    Py_DECREF(iterator);
+    if (PyErr_Occurred())
+        SWIG_fail;
+    $1 = &values;
+}
+
+%fragment("mrattle_intListToPython", "header") {
+static PyObject* intListToPython(const std::vector<int>& values) {
+    PyObject* list = PyList_New(values.size());
+    for (size_t i = 0; i < values.size(); i++)
+        PyList_SET_ITEM(list, i, PyLong_FromLong(values[i]));
+    return list;
+}
+}
+
+%typemap(out, fragment="mrattle_intListToPython") const std::vector<int>& {
+    $result = intListToPython(*$1);
+}
+
+%typemap(out, fragment="mrattle_intListToPython") const std::vector<std::vector<int> >& {
+    $result = PyList_New($1->size());
+    for (size_t i = 0; i < $1->size(); i++)
+        PyList_SET_ITEM($result, i, intListToPython((*$1)[i]));
+}
+
+/* Types as the Python docstrings name them. */
+%typemap(doctype) const std::vector<int>& "list of int"
+%typemap(doctype) const std::vector<std::vector<int> >& "list of list of int"
+
+#define OPENMM_EXPORT_MRATTLE
+/* The bookkeeping object is C++-only; its content is exposed by the integrator's queries. */
+%ignore MRattlePlugin::RigidBodyIntegrator::getRigidBodySet;
+%include "RigidBodyIntegrator.h"
+
+/*
+ * Wrap one concrete integrator class whose constructor takes the step size: a Quantity
+ * of time or a number of picoseconds, as for openmm.VerletIntegrator.
+ */
+%define MRATTLE_INTEGRATOR(CLASS, HEADER)
+%typemap(doctype) double stepSize "float or Quantity (time)"
+%feature("pythonprepend") MRattlePlugin::CLASS::CLASS %{
+    if unit.is_quantity(stepSize):
+        stepSize = stepSize.value_in_unit(unit.picosecond)
+%}
+%include HEADER
+%enddef
+
+MRATTLE_INTEGRATOR(MRattleIntegrator, "MRattleIntegrator.h")
