@@ -7,3 +7,6 @@ MRattlePlugin::RigidBodyKernel::~RigidBodyKernel() {
 
 MRattlePlugin::IntegrateMRattleStepKernel::~IntegrateMRattleStepKernel() {
 }
+
+MRattlePlugin::IntegrateRigidSplittingStepKernel::~IntegrateRigidSplittingStepKernel() {
+}

@@ -16,6 +16,7 @@ class ContextImpl;
 namespace MRattlePlugin {
 
 class MRattleIntegrator;
+class RigidSplittingIntegrator;
 
 /**
  * Operations every rigid-body integrator needs from its platform: velocity projection
@@ -57,6 +58,25 @@ public:
     virtual void integratePositions(OpenMM::ContextImpl& context, const MRattleIntegrator& integrator) = 0;
     /** Half kick with the new forces, velocity reset; advances time and step count. */
     virtual void integrateVelocities(OpenMM::ContextImpl& context, const MRattleIntegrator& integrator) = 0;
+};
+
+/**
+ * One step of the symplectic splitting baseline (RigidSplittingIntegrator), split around
+ * the force evaluation at the new positions.
+ */
+class OPENMM_EXPORT_MRATTLE IntegrateRigidSplittingStepKernel : public RigidBodyKernel {
+public:
+    static std::string Name() {
+        return "IntegrateRigidSplittingStep";
+    }
+    IntegrateRigidSplittingStepKernel(const std::string& name, const OpenMM::Platform& platform)
+        : RigidBodyKernel(name, platform) {
+    }
+    ~IntegrateRigidSplittingStepKernel() override;
+    /** Half kick, drift and free rotor of every body; velocity Verlet and RATTLE for free particles; virtual sites. */
+    virtual void integratePositions(OpenMM::ContextImpl& context, const RigidSplittingIntegrator& integrator) = 0;
+    /** Half kick with the new forces, velocity reset; advances time and step count. */
+    virtual void integrateVelocities(OpenMM::ContextImpl& context, const RigidSplittingIntegrator& integrator) = 0;
 };
 
 } // namespace MRattlePlugin

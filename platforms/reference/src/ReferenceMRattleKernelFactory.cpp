@@ -1,5 +1,6 @@
 #include "ReferenceMRattleKernelFactory.h"
 #include "ReferenceMRattleKernels.h"
+#include "ReferenceRigidSplittingKernels.h"
 #include "openmm/OpenMMException.h"
 #include "openmm/Platform.h"
 #include "openmm/internal/windowsExport.h"
@@ -11,6 +12,8 @@ KernelImpl* ReferenceMRattleKernelFactory::createKernelImpl(std::string name, co
                                                             ContextImpl& context) const {
     if (name == IntegrateMRattleStepKernel::Name())
         return new ReferenceIntegrateMRattleStepKernel(name, platform);
+    if (name == IntegrateRigidSplittingStepKernel::Name())
+        return new ReferenceIntegrateRigidSplittingStepKernel(name, platform);
     throw OpenMMException("ReferenceMRattleKernelFactory: no kernel named '" + name + "'");
 }
 
@@ -25,6 +28,7 @@ extern "C" OPENMM_EXPORT void registerKernelFactories() {
             // One factory per platform: each Platform deletes the factories it holds.
             ReferenceMRattleKernelFactory* factory = new ReferenceMRattleKernelFactory();
             platform.registerKernelFactory(IntegrateMRattleStepKernel::Name(), factory);
+            platform.registerKernelFactory(IntegrateRigidSplittingStepKernel::Name(), factory);
         }
     }
 }

@@ -1,0 +1,416 @@
+/*
+ * The splitting baseline (RigidSplittingIntegrator): rigidity, conservation on a free
+ * asymmetric body, second-order energy error, convergence to M-RATTLE as h -> 0, linear
+ * bodies, free-particle constraints, exact restarts, and the semantics it shares with
+ * MRattleIntegrator.
+ */
+#include "RigidSplittingIntegrator.h"
+#include "TestSupport.h"
+#include "mrattle/RigidBodyRotor.h"
+#include "openmm/reference/SimTKOpenMMRealType.h"
+#include <gtest/gtest.h>
+#include <algorithm>
+#include <cmath>
+#include <sstream>
+
+using namespace OpenMM;
+using namespace MRattlePlugin;
+using namespace MRattleTest;
+using std::vector;
+
+namespace {
+
+/** A non-planar, asymmetric 5-site body (three distinct principal moments), about its centre of mass. */
+void asymmetricBody(vector<Vec3>& sites, vector<double>& masses) {
+    sites = {Vec3(0, 0, 0), Vec3(0.10, 0, 0), Vec3(0, 0.12, 0), Vec3(0, 0, 0.09), Vec3(-0.07, -0.05, 0.03)};
+    masses = {12.0, 1.0, 16.0, 14.0, 2.0};
+    Vec3 center;
+    double total = 0;
+    for (size_t i = 0; i < sites.size(); i++) {
+        center += sites[i] * masses[i];
+        total += masses[i];
+    }
+    for (Vec3& s : sites)
+        s -= center / total;
+}
+
+/**
+ * Four asymmetric bodies (declared explicitly) at the corners of a tetrahedron, held
+ * together by springs between atoms of different bodies, at rest length 1.3x their
+ * initial distance (so they start out of equilibrium and the forces do work).
+ */
+struct Cluster {
+    System system;
+    vector<Vec3> positions;
+    vector<vector<int> > bodies;
+};
+
+Cluster springCluster() {
+    Cluster c;
+    vector<Vec3> sites;
+    vector<double> masses;
+    asymmetricBody(sites, masses);
+    const Vec3 corners[4] = {Vec3(0.3, 0.3, 0.3), Vec3(0.3, -0.3, -0.3), Vec3(-0.3, 0.3, -0.3), Vec3(-0.3, -0.3, 0.3)};
+    for (int b = 0; b < 4; b++) {
+        vector<int> body;
+        for (size_t i = 0; i < sites.size(); i++) {
+            body.push_back(c.system.addParticle(masses[i]));
+            // Rotate each copy differently so the bodies are not aligned.
+            const Vec3& s = sites[i];
+            Vec3 rotated = (b % 2 == 0 ? Vec3(s[1], s[2], s[0]) : Vec3(s[0], -s[2], s[1]));
+            c.positions.push_back(corners[b] + (b < 2 ? rotated : s));
+        }
+        c.bodies.push_back(body);
+    }
+    HarmonicBondForce* springs = new HarmonicBondForce();
+    for (int b1 = 0; b1 < 4; b1++)
+        for (int b2 = b1 + 1; b2 < 4; b2++)
+            for (int k = 0; k < 2; k++) {
+                int i = c.bodies[b1][k + 1], j = c.bodies[b2][(k + b1 + b2) % 5];
+                Vec3 d = c.positions[i] - c.positions[j];
+                springs->addBond(i, j, 1.3 * std::sqrt(d.dot(d)), 300.0);
+            }
+    c.system.addForce(springs);
+    return c;
+}
+
+template <class IntegratorType>
+void addBodies(IntegratorType& integrator, const vector<vector<int> >& bodies) {
+    for (const auto& body : bodies)
+        integrator.addRigidBody(body);
+}
+
+/** Largest |E(t) - E(0)| of the total energy over a run of the given duration. */
+double energyDeviation(double h, double duration) {
+    Cluster c = springCluster();
+    RigidSplittingIntegrator integrator(h);
+    addBodies(integrator, c.bodies);
+    Context context(c.system, integrator, platform("Reference"));
+    context.setPositions(c.positions);
+    context.setVelocitiesToTemperature(300, 7);
+    State s0 = context.getState(State::Energy);
+    const double e0 = s0.getKineticEnergy() + s0.getPotentialEnergy();
+    double worst = 0;
+    const int steps = (int) std::lround(duration / h);
+    for (int i = 0; i < steps; i++) {
+        integrator.step(1);
+        State s = context.getState(State::Energy);
+        worst = std::max(worst, std::fabs(s.getKineticEnergy() + s.getPotentialEnergy() - e0));
+    }
+    return worst;
+}
+
+/** Positions of the cluster after the given time, from the same initial state, with either integrator. */
+template <class IntegratorType>
+vector<Vec3> clusterPositionsAfter(double h, double duration) {
+    Cluster c = springCluster();
+    IntegratorType integrator(h);
+    addBodies(integrator, c.bodies);
+    Context context(c.system, integrator, platform("Reference"));
+    context.setPositions(c.positions);
+    context.setVelocitiesToTemperature(300, 11);
+    integrator.step((int) std::lround(duration / h));
+    return context.getState(State::Positions).getPositions();
+}
+
+double maxDifference(const vector<Vec3>& a, const vector<Vec3>& b) {
+    double worst = 0;
+    for (size_t i = 0; i < a.size(); i++) {
+        Vec3 d = a[i] - b[i];
+        worst = std::max(worst, std::sqrt(d.dot(d)));
+    }
+    return worst;
+}
+
+/** Angular momentum about the centre of mass (free of the round-off of a drifting centre). */
+Vec3 angularMomentum(const System& system, const vector<Vec3>& x, const vector<Vec3>& v) {
+    Vec3 center, velocity;
+    double total = 0;
+    for (int i = 0; i < system.getNumParticles(); i++) {
+        double m = system.getParticleMass(i);
+        center += x[i] * m;
+        velocity += v[i] * m;
+        total += m;
+    }
+    center /= total;
+    velocity /= total;
+    Vec3 l;
+    for (int i = 0; i < system.getNumParticles(); i++)
+        l += (x[i] - center).cross(v[i] - velocity) * system.getParticleMass(i);
+    return l;
+}
+
+} // namespace
+
+TEST(RigidSplitting, RotorStepHasThirdOrderLocalErrorAndConservesAngularMomentum) {
+    // Spherical top: the exact free rotation over h is by h * Pi / I about Pi, with Pi
+    // fixed in the body. The splitting's sub-rotations do not commute, so one step is
+    // off by O(h^3): halving h divides the error by 8.
+    Eigen::Vector3d moments(2.0, 2.0, 2.0), pi(0.3, -0.4, 1.2);
+    double errors[2];
+    for (int k = 0; k < 2; k++) {
+        double h = 0.2 / (1 << k);
+        Eigen::Vector3d advanced = pi;
+        Eigen::Matrix3d R = RigidBodyRotor::freeRotorStep(moments, advanced, h, false);
+        errors[k] = (R - RigidBodyMath::rotationFromVector(h * pi / 2.0)).norm();
+    }
+    EXPECT_GT(errors[0] / errors[1], 7.0);
+    EXPECT_LT(errors[0] / errors[1], 9.0);
+    // Asymmetric top: the space-frame angular momentum Q Pi is kept exactly (Q = 1 here).
+    Eigen::Vector3d asymmetric(1.0, 2.0, 3.5), pi2 = pi;
+    Eigen::Matrix3d R2 = RigidBodyRotor::freeRotorStep(asymmetric, pi2, 0.1, false);
+    EXPECT_LT((R2 * pi2 - pi).norm(), 1e-14);
+    EXPECT_LT((R2.transpose() * R2 - Eigen::Matrix3d::Identity()).norm(), 1e-14);
+    EXPECT_NEAR(1.0, R2.determinant(), 1e-14);
+}
+
+TEST(RigidSplitting, FreeAsymmetricBodyConservesAngularMomentumAndStaysRigid) {
+    vector<Vec3> sites;
+    vector<double> masses;
+    asymmetricBody(sites, masses);
+    System system;
+    for (double m : masses)
+        system.addParticle(m);
+    RigidSplittingIntegrator integrator(0.002);
+    integrator.addRigidBody({0, 1, 2, 3, 4});
+    Context context(system, integrator, platform("Reference"));
+    context.setPositions(sites);
+    // A tumbling motion about all three axes, plus drift.
+    vector<Vec3> velocities;
+    const Vec3 omega(4.0, -7.0, 10.0), drift(0.3, 0.1, -0.2);
+    for (const Vec3& s : sites)
+        velocities.push_back(drift + omega.cross(s));
+    context.setVelocities(velocities);
+    State s0 = context.getState(State::Positions | State::Velocities | State::Energy);
+    const Vec3 l0 = angularMomentum(system, s0.getPositions(), s0.getVelocities());
+    const double e0 = s0.getKineticEnergy();
+    double worstEnergy = 0, firstHalfWorst = 0;
+    const int steps = 10000;
+    for (int i = 0; i < steps; i++) {
+        integrator.step(1);
+        double e = context.getState(State::Energy).getKineticEnergy();
+        worstEnergy = std::max(worstEnergy, std::fabs(e - e0));
+        if (i < steps / 2)
+            firstHalfWorst = worstEnergy;
+    }
+    State s = context.getState(State::Positions | State::Velocities | State::Energy);
+    Vec3 dl = angularMomentum(system, s.getPositions(), s.getVelocities()) - l0;
+    // Each step keeps it to round-off (~1e-15 relative); 10^4 steps accumulate at most ~1e-11.
+    EXPECT_LT(std::sqrt(dl.dot(dl)), 1e-11 * std::sqrt(l0.dot(l0)));
+    EXPECT_LT(maxDistanceChange(sites, s.getPositions(), integrator.getBodiesInEffect()), 1e-10);
+    // The splitting does not conserve the rotor energy exactly: it oscillates at O((h w)^2)
+    // (here h|w| ~ 0.025) with no drift, so the second half adds nothing to the worst error.
+    EXPECT_LT(worstEnergy, 1e-3 * e0);
+    EXPECT_GT(worstEnergy, 0.0);
+    EXPECT_LT(worstEnergy, 1.5 * firstHalfWorst) << worstEnergy / e0 << " " << firstHalfWorst / e0;
+    // Centre of mass moves uniformly.
+    Vec3 center;
+    double totalMass = 0;
+    for (int i = 0; i < 5; i++) {
+        center += s.getPositions()[i] * masses[i];
+        totalMass += masses[i];
+    }
+    center /= totalMass;
+    Vec3 expected = drift * (steps * 0.002);
+    EXPECT_NEAR(expected[0], center[0], 1e-10);
+    EXPECT_NEAR(expected[1], center[1], 1e-10);
+    EXPECT_NEAR(expected[2], center[2], 1e-10);
+}
+
+TEST(RigidSplitting, EnergyErrorIsSecondOrder) {
+    const double duration = 0.4;
+    double coarse = energyDeviation(0.002, duration);
+    double fine = energyDeviation(0.001, duration);
+    EXPECT_GT(coarse, 0.0);
+    double ratio = coarse / fine;
+    EXPECT_GT(ratio, 3.0) << "coarse " << coarse << " fine " << fine;
+    EXPECT_LT(ratio, 5.0) << "coarse " << coarse << " fine " << fine;
+}
+
+TEST(RigidSplitting, ConvergesToMRattleAsStepShrinks) {
+    // Both are second order, so after a fixed time their difference shrinks like h^2.
+    const double duration = 0.2;
+    double previous = 0;
+    for (double h : {0.004, 0.002, 0.001}) {
+        double difference = maxDifference(clusterPositionsAfter<RigidSplittingIntegrator>(h, duration),
+                                          clusterPositionsAfter<MRattleIntegrator>(h, duration));
+        EXPECT_GT(difference, 0.0);
+        EXPECT_LT(difference, 1e-3);
+        if (previous > 0) {
+            EXPECT_GT(previous / difference, 3.0) << "h " << h;
+            EXPECT_LT(previous / difference, 5.0) << "h " << h;
+        }
+        previous = difference;
+    }
+}
+
+TEST(RigidSplitting, ClusterStaysRigid) {
+    Cluster c = springCluster();
+    RigidSplittingIntegrator integrator(0.002);
+    addBodies(integrator, c.bodies);
+    Context context(c.system, integrator, platform("Reference"));
+    context.setPositions(c.positions);
+    context.setVelocitiesToTemperature(300, 3);
+    integrator.step(2000);
+    vector<Vec3> x = context.getState(State::Positions).getPositions();
+    EXPECT_LT(maxDistanceChange(c.positions, x, c.bodies), 1e-10);
+    EXPECT_EQ(4 * 6, integrator.getNumDegreesOfFreedom());
+}
+
+TEST(RigidSplitting, LinearBodyHasFiveDegreesOfFreedomAndStaysOnItsLine) {
+    // A CO2-like linear body tumbling freely, and an asymmetric body it is tied to by a spring.
+    System system;
+    vector<Vec3> positions = {Vec3(-0.116, 0, 0), Vec3(0, 0, 0), Vec3(0.116, 0, 0)};
+    for (double m : {16.0, 12.0, 16.0})
+        system.addParticle(m);
+    vector<Vec3> sites;
+    vector<double> masses;
+    asymmetricBody(sites, masses);
+    for (size_t i = 0; i < sites.size(); i++) {
+        system.addParticle(masses[i]);
+        positions.push_back(sites[i] + Vec3(0.5, 0.1, 0));
+    }
+    HarmonicBondForce* spring = new HarmonicBondForce();
+    spring->addBond(2, 4, 0.45, 200.0);
+    system.addForce(spring);
+    RigidSplittingIntegrator integrator(0.002);
+    integrator.addRigidBody({0, 1, 2});
+    integrator.addRigidBody({3, 4, 5, 6, 7});
+    Context context(system, integrator, platform("Reference"));
+    context.setPositions(positions);
+    EXPECT_TRUE(integrator.isBodyLinear(0));
+    EXPECT_FALSE(integrator.isBodyLinear(1));
+    EXPECT_EQ(11, integrator.getNumDegreesOfFreedom());
+    // Spin about the axis is removed by the projection: only tumbling remains.
+    vector<Vec3> velocities(8);
+    velocities[0] = Vec3(0, 1.0, 0.5);
+    velocities[2] = Vec3(0.2, -1.0, 0.5);
+    velocities[5] = Vec3(0.3, 0, 0);
+    context.setVelocities(velocities);
+    State s0 = context.getState(State::Energy);
+    const double e0 = s0.getKineticEnergy() + s0.getPotentialEnergy();
+    double worst = 0;
+    for (int i = 0; i < 500; i++) {
+        integrator.step(4);
+        State s = context.getState(State::Energy);
+        worst = std::max(worst, std::fabs(s.getKineticEnergy() + s.getPotentialEnergy() - e0));
+    }
+    State s = context.getState(State::Positions | State::Velocities);
+    const vector<Vec3>& x = s.getPositions();
+    EXPECT_LT(maxDistanceChange(positions, x, integrator.getBodiesInEffect()), 1e-10);
+    Vec3 axis = x[2] - x[0];
+    Vec3 offCentre = (x[1] - x[0]).cross(axis);
+    EXPECT_LT(std::sqrt(offCentre.dot(offCentre)), 1e-12);
+    // No spin about the axis: the atoms' velocities relative to the centre are normal to it.
+    const vector<Vec3>& v = s.getVelocities();
+    EXPECT_LT(std::fabs((v[2] - v[1]).dot(axis)), 1e-9);
+    EXPECT_LT(worst, 1e-2 * std::fabs(e0) + 0.05);
+    EXPECT_GT(worst, 0.0);
+}
+
+TEST(RigidSplitting, FreeParticleConstraintsAreKeptByRattle) {
+    // A constrained diatomic of free particles beside a rigid body.
+    Cluster c = springCluster();
+    int a = c.system.addParticle(14.0), b = c.system.addParticle(14.0);
+    c.positions.push_back(Vec3(0, 0, 0.8));
+    c.positions.push_back(Vec3(0.11, 0, 0.8));
+    c.system.addConstraint(a, b, 0.11);
+    HarmonicBondForce* tie = new HarmonicBondForce();
+    tie->addBond(0, a, 0.6, 100.0);
+    c.system.addForce(tie);
+    RigidSplittingIntegrator integrator(0.002);
+    integrator.setConstraintTolerance(1e-8);
+    addBodies(integrator, c.bodies);
+    Context context(c.system, integrator, platform("Reference"));
+    context.setPositions(c.positions);
+    context.setVelocitiesToTemperature(300, 5);
+    EXPECT_EQ(4 * 6 + 5, integrator.getNumDegreesOfFreedom());
+    integrator.step(500);
+    State s = context.getState(State::Positions | State::Velocities);
+    Vec3 d = s.getPositions()[b] - s.getPositions()[a];
+    double length = std::sqrt(d.dot(d));
+    EXPECT_NEAR(0.11, length, 1e-8);
+    Vec3 dv = s.getVelocities()[b] - s.getVelocities()[a];
+    EXPECT_LT(std::fabs(dv.dot(d) / length), 1e-6);
+    EXPECT_LT(maxDistanceChange(c.positions, s.getPositions(), c.bodies), 1e-10);
+}
+
+TEST(RigidSplitting, RestartFromCheckpointIsExact) {
+    Cluster c = springCluster();
+    RigidSplittingIntegrator integrator(0.002);
+    addBodies(integrator, c.bodies);
+    Context context(c.system, integrator, platform("Reference"));
+    context.setPositions(c.positions);
+    context.setVelocitiesToTemperature(300, 9);
+    integrator.step(50);
+    std::stringstream checkpoint;
+    context.createCheckpoint(checkpoint);
+    integrator.step(100);
+    State uninterrupted = context.getState(State::Positions | State::Velocities);
+    context.loadCheckpoint(checkpoint);
+    integrator.step(100);
+    State restarted = context.getState(State::Positions | State::Velocities);
+    for (int i = 0; i < c.system.getNumParticles(); i++)
+        for (int k = 0; k < 3; k++) {
+            EXPECT_EQ(uninterrupted.getPositions()[i][k], restarted.getPositions()[i][k]);
+            EXPECT_EQ(uninterrupted.getVelocities()[i][k], restarted.getVelocities()[i][k]);
+        }
+}
+
+TEST(RigidSplitting, SharesBodySemanticsWithMRattle) {
+    // Molecules as bodies when none is declared; same degrees of freedom and velocities.
+    Molecule mol = benzene();
+    System system;
+    for (int copy = 0; copy < 2; copy++)
+        for (double m : mol.masses)
+            system.addParticle(m);
+    HarmonicBondForce* bonds = new HarmonicBondForce();
+    vector<Vec3> positions;
+    for (int copy = 0; copy < 2; copy++) {
+        for (auto& p : mol.bonds)
+            bonds->addBond(p.first + 12 * copy, p.second + 12 * copy, 0.14, 1000.0);
+        for (const Vec3& s : mol.sites)
+            positions.push_back(s + Vec3(0, 0, 0.4 * copy));
+    }
+    system.addForce(bonds);
+    RigidSplittingIntegrator splitting(0.002);
+    MRattleIntegrator mrattle(0.002);
+    Context splittingContext(system, splitting, platform("Reference"));
+    Context mrattleContext(system, mrattle, platform("Reference"));
+    splittingContext.setPositions(positions);
+    mrattleContext.setPositions(positions);
+    EXPECT_EQ(2, splitting.getNumBodiesInEffect());
+    EXPECT_EQ(mrattle.getNumDegreesOfFreedom(), splitting.getNumDegreesOfFreedom());
+    splittingContext.setVelocitiesToTemperature(250, 4);
+    mrattleContext.setVelocitiesToTemperature(250, 4);
+    vector<Vec3> v1 = splittingContext.getState(State::Velocities).getVelocities();
+    vector<Vec3> v2 = mrattleContext.getState(State::Velocities).getVelocities();
+    EXPECT_EQ(0.0, maxDifference(v1, v2));
+    double ke = splittingContext.getState(State::Energy).getKineticEnergy();
+    EXPECT_NEAR(0.5 * 12 * BOLTZ * 250, ke, 1e-9);
+    // A bond-only planar molecule: intra-body forces do nothing, so the motion is free.
+    splitting.step(300);
+    vector<Vec3> x = splittingContext.getState(State::Positions).getPositions();
+    EXPECT_LT(maxDistanceChange(positions, x, splitting.getBodiesInEffect()), 1e-10);
+}
+
+TEST(RigidSplitting, WorksOnCpuPlatform) {
+    Cluster c = springCluster();
+    RigidSplittingIntegrator integrator(0.002);
+    addBodies(integrator, c.bodies);
+    Context context(c.system, integrator, platform("CPU"));
+    context.setPositions(c.positions);
+    context.setVelocitiesToTemperature(300, 3);
+    integrator.step(200);
+    vector<Vec3> x = context.getState(State::Positions).getPositions();
+    EXPECT_LT(maxDistanceChange(c.positions, x, c.bodies), 1e-10);
+}
+
+TEST(RigidSplitting, RejectsBadStepSize) {
+    Cluster c = springCluster();
+    RigidSplittingIntegrator integrator(0.0);
+    addBodies(integrator, c.bodies);
+    Context context(c.system, integrator, platform("Reference"));
+    context.setPositions(c.positions);
+    EXPECT_THROW(integrator.step(1), OpenMMException);
+}
