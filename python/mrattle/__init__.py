@@ -42,6 +42,10 @@ from .integrators import RigidBodyIntegrator, MRattleIntegrator
 
 PLUGIN_PATH = _loadKernelPlugin()
 
+from .reporters import StateDataReporter, degreesOfFreedom, kineticTemperature
+from .interactions import removeIntraBodyInteractions
+from . import models
 
-__all__ = ['RigidBodyIntegrator', 'MRattleIntegrator', 'StateDataReporter', 'removeIntraBodyInteractions',
-           'models', 'PLUGIN_PATH']
+
+__all__ = ['RigidBodyIntegrator', 'MRattleIntegrator', 'StateDataReporter', 'degreesOfFreedom',
+           'kineticTemperature', 'removeIntraBodyInteractions', 'models', 'PLUGIN_PATH']

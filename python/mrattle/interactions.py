@@ -1,0 +1,175 @@
+"""Removal of interactions that cannot affect rigid-body motion."""
+import re
+import xml.etree.ElementTree as ElementTree
+
+import openmm
+
+from .integrators import RigidBodyIntegrator
+
+# Bonded forces whose terms are dropped when every particle of a term is in one body:
+# force type -> (list element, term element). The particles of a term are its attributes
+# p1, p2, ... (a1..a4 and b1..b4 for CMAP torsions).
+_BONDED_TERMS = {
+    'HarmonicBondForce': ('Bonds', 'Bond'),
+    'HarmonicAngleForce': ('Angles', 'Angle'),
+    'PeriodicTorsionForce': ('Torsions', 'Torsion'),
+    'RBTorsionForce': ('Torsions', 'Torsion'),
+    'CMAPTorsionForce': ('Torsions', 'Torsion'),
+    'CustomBondForce': ('Bonds', 'Bond'),
+    'CustomAngleForce': ('Angles', 'Angle'),
+    'CustomTorsionForce': ('Torsions', 'Torsion'),
+    'CustomCompoundBondForce': ('Bonds', 'Bond'),
+}
+_PARTICLE_ATTRIBUTE = re.compile(r'^(p|a|b)\d+$')
+
+
+def removeIntraBodyInteractions(system, positions, bodies=None):
+    """A copy of a System without the interactions inside rigid bodies.
+
+    Forces between particles of one rigid body have zero net force and zero net torque on
+    it, so under a rigid-body integrator they never affect the motion: this removes them
+    so they are not computed. The potential energy changes by a constant (the removed
+    intra-body energy); the trajectory does not change.
+
+    What is removed, for pairs or terms whose particles all lie in one body:
+
+    - bonded terms of HarmonicBondForce, HarmonicAngleForce, PeriodicTorsionForce,
+      RBTorsionForce, CMAPTorsionForce, CustomBondForce, CustomAngleForce,
+      CustomTorsionForce and CustomCompoundBondForce (forces left empty are dropped);
+    - NonbondedForce pairs: made exceptions with zero charge product and epsilon, which
+      OpenMM skips (with Ewald/PME the reciprocal-space part of an excluded pair is still
+      subtracted, as for any exclusion);
+    - CustomNonbondedForce pairs: made exclusions.
+
+    The bonds removed were what made each molecule one molecule for OpenMM (and so one
+    rigid body for an integrator with no addRigidBody() call): to keep that, each body's
+    particles are joined by a chain of constraints at their distances in ``positions``,
+    unless constraints already join them. Rigid-body integrators ignore constraints inside
+    a body, so they cost nothing per step; other tools (minimizer, applyConstraints) see
+    the molecules as rigid.
+
+    Other forces (implicit solvent, AMOEBA, CustomCentroidBondForce, ...) are kept as they
+    are. A virtual site counts as part of a body when all the particles it is built from are.
+    A long-range (dispersion) correction that discounts excluded pairs changes slightly,
+    which matters only at constant pressure.
+
+    Parameters
+    ----------
+    system : openmm.System
+        not modified
+    positions : list of Vec3 or Quantity
+        positions of the rigid geometry (for the constraint lengths)
+    bodies : list of lists of int, a RigidBodyIntegrator bound to a Context, or None
+        the rigid bodies; None means the molecules of the System with two or more massive
+        particles, which are the bodies an integrator with no addRigidBody() call uses
+
+    Returns
+    -------
+    openmm.System
+        the new System
+    """
+    bodyOfParticle = _bodyOfParticle(system, _resolveBodies(system, bodies))
+
+    def inOneBody(particles):
+        owner = bodyOfParticle.get(particles[0], -1)
+        return owner >= 0 and all(bodyOfParticle.get(p, -1) == owner for p in particles)
+
+    # Bonded terms are removed in the System's XML: OpenMM forces cannot delete terms, and
+    # the XML keeps every other setting (parameters, groups, names) of every force.
+    root = ElementTree.fromstring(openmm.XmlSerializer.serialize(system))
+    forces = root.find('Forces')
+    for force in list(forces):
+        layout = _BONDED_TERMS.get(force.get('type'))
+        if layout is None:
+            continue
+        terms = force.find(layout[0])
+        for term in list(terms.findall(layout[1])):
+            particles = [int(value) for name, value in term.attrib.items() if _PARTICLE_ATTRIBUTE.match(name)]
+            if particles and inOneBody(particles):
+                terms.remove(term)
+        if len(terms) == 0:
+            forces.remove(force)
+    newSystem = openmm.XmlSerializer.deserialize(ElementTree.tostring(root, encoding='unicode'))
+
+    bodyMembers = {}
+    for particle, body in bodyOfParticle.items():
+        if not system.isVirtualSite(particle):
+            bodyMembers.setdefault(body, []).append(particle)
+    _joinBodiesByConstraints(newSystem, bodyMembers.values(), positions)
+    for particle, body in bodyOfParticle.items():
+        if system.isVirtualSite(particle):
+            bodyMembers[body].append(particle)
+    intraPairs = [(members[i], members[j]) for members in bodyMembers.values()
+                  for i in range(len(members)) for j in range(i + 1, len(members))]
+    for force in newSystem.getForces():
+        if isinstance(force, openmm.NonbondedForce):
+            for p1, p2 in intraPairs:
+                force.addException(p1, p2, 0.0, 1.0, 0.0, True)
+        elif isinstance(force, openmm.CustomNonbondedForce):
+            existing = set()
+            for i in range(force.getNumExclusions()):
+                p1, p2 = force.getExclusionParticles(i)
+                existing.add((min(p1, p2), max(p1, p2)))
+            for p1, p2 in intraPairs:
+                if (min(p1, p2), max(p1, p2)) not in existing:
+                    force.addExclusion(p1, p2)
+    return newSystem
+
+
+def _joinBodiesByConstraints(system, bodies, positions):
+    """Add constraints along a chain through each body unless its particles are already
+    connected by constraints among themselves."""
+    if openmm.unit.is_quantity(positions):
+        positions = positions.value_in_unit(openmm.unit.nanometers)
+    parent = {}
+
+    def root(p):
+        while parent.get(p, p) != p:
+            p = parent[p]
+        return p
+
+    for i in range(system.getNumConstraints()):
+        p1, p2, distance = system.getConstraintParameters(i)
+        parent[root(p1)] = root(p2)
+    for body in bodies:
+        for previous, particle in zip(body, body[1:]):
+            if root(previous) != root(particle):
+                delta = [a - b for a, b in zip(positions[particle], positions[previous])]
+                system.addConstraint(previous, particle, sum(d*d for d in delta)**0.5)
+                parent[root(previous)] = root(particle)
+
+
+def _resolveBodies(system, bodies):
+    if isinstance(bodies, RigidBodyIntegrator):
+        return bodies.getBodiesInEffect()
+    if bodies is not None:
+        return [list(body) for body in bodies]
+    # OpenMM's molecules (bonds and constraints), from a throwaway Context.
+    context = openmm.Context(system, openmm.VerletIntegrator(0.001), openmm.Platform.getPlatformByName('Reference'))
+    molecules = context.getMolecules()
+    del context
+    return [[p for p in molecule if system.getParticleMass(p).value_in_unit(openmm.unit.dalton) > 0
+             and not system.isVirtualSite(p)] for molecule in molecules]
+
+
+def _bodyOfParticle(system, bodies):
+    """particle -> body index, for bodies of 2+ particles plus the virtual sites built only from one body."""
+    owner = {}
+    for index, body in enumerate(bodies):
+        if len(body) < 2:
+            continue
+        for particle in body:
+            if particle < 0 or particle >= system.getNumParticles():
+                raise ValueError('removeIntraBodyInteractions: particle %d of body %d is out of range (%d particles)'
+                                 % (particle, index, system.getNumParticles()))
+            if particle in owner:
+                raise ValueError('removeIntraBodyInteractions: particle %d is in bodies %d and %d'
+                                 % (particle, owner[particle], index))
+            owner[particle] = index
+    for particle in range(system.getNumParticles()):
+        if system.isVirtualSite(particle):
+            site = system.getVirtualSite(particle)
+            parents = {owner.get(site.getParticle(i), -1) for i in range(site.getNumParticles())}
+            if len(parents) == 1 and -1 not in parents:
+                owner[particle] = parents.pop()
+    return owner

@@ -1,0 +1,51 @@
+"""Reporting with the rigid-body degrees of freedom."""
+import openmm
+from openmm import app, unit
+
+from .integrators import RigidBodyIntegrator
+
+
+def degreesOfFreedom(simulationOrContext):
+    """Degrees of freedom as OpenMM counts them for the integrator in use.
+
+    For a RigidBodyIntegrator bound to the Context: 6 per rigid body (5 if linear), 3 per
+    free particle, minus constraints among free particles, minus 3 with a CMMotionRemover.
+    For any other integrator: OpenMM's count (3 per massive particle, minus constraints,
+    minus 3 with a CMMotionRemover).
+    """
+    context = getattr(simulationOrContext, 'context', simulationOrContext)
+    integrator = context.getIntegrator()
+    if isinstance(integrator, RigidBodyIntegrator):
+        return integrator.getNumDegreesOfFreedom()
+    system = context.getSystem()
+    dof = sum(3 for i in range(system.getNumParticles()) if system.getParticleMass(i) > 0*unit.dalton)
+    for i in range(system.getNumConstraints()):
+        p1, p2, distance = system.getConstraintParameters(i)
+        if system.getParticleMass(p1) > 0*unit.dalton or system.getParticleMass(p2) > 0*unit.dalton:
+            dof -= 1
+    if any(isinstance(system.getForce(i), openmm.CMMotionRemover) for i in range(system.getNumForces())):
+        dof -= 3
+    return dof
+
+
+def kineticTemperature(simulationOrContext, state=None):
+    """The instantaneous temperature 2 KE / (DOF k_B) with degreesOfFreedom(), as a Quantity in K."""
+    context = getattr(simulationOrContext, 'context', simulationOrContext)
+    if state is None:
+        state = context.getState(getEnergy=True)
+    return (2*state.getKineticEnergy()/(degreesOfFreedom(context)*unit.MOLAR_GAS_CONSTANT_R)).in_units_of(unit.kelvin)
+
+
+class StateDataReporter(app.StateDataReporter):
+    """openmm.app.StateDataReporter whose temperature uses the rigid-body degrees of freedom.
+
+    OpenMM's reporter counts 3 degrees of freedom per particle minus constraints, which is
+    wrong for rigid bodies (a rigid benzene has 6, not 36 - 0). With a RigidBodyIntegrator
+    (such as MRattleIntegrator) this reporter asks the integrator instead; with any other
+    integrator it behaves exactly like OpenMM's. It takes the same arguments.
+    """
+
+    def _initializeConstants(self, simulation):
+        super()._initializeConstants(simulation)
+        if self._temperature and isinstance(simulation.integrator, RigidBodyIntegrator):
+            self._dof = simulation.integrator.getNumDegreesOfFreedom()
