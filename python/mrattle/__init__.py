@@ -38,7 +38,7 @@ def _loadKernelPlugin():
 
 
 # The SWIG module first: it loads libMRattlePlugin.so, which the kernel plugin needs.
-from .integrators import RigidBodyIntegrator, MRattleIntegrator
+from .integrators import RigidBodyIntegrator, MRattleIntegrator, RigidSplittingIntegrator
 
 PLUGIN_PATH = _loadKernelPlugin()
 
@@ -47,5 +47,5 @@ from .interactions import removeIntraBodyInteractions
 from . import models
 
 
-__all__ = ['RigidBodyIntegrator', 'MRattleIntegrator', 'StateDataReporter', 'degreesOfFreedom',
+__all__ = ['RigidBodyIntegrator', 'MRattleIntegrator', 'RigidSplittingIntegrator', 'StateDataReporter', 'degreesOfFreedom',
            'kineticTemperature', 'removeIntraBodyInteractions', 'models', 'PLUGIN_PATH']

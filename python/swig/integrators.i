@@ -16,6 +16,7 @@ from openmm import unit
 
 %{
 #include "MRattleIntegrator.h"
+#include "RigidSplittingIntegrator.h"
 #include <climits>
 #include <exception>
 #include <vector>
@@ -117,3 +118,4 @@ static PyObject* intListToPython(const std::vector<int>& values) {
 %enddef
 
 MRATTLE_INTEGRATOR(MRattleIntegrator, "MRattleIntegrator.h")
+MRATTLE_INTEGRATOR(RigidSplittingIntegrator, "RigidSplittingIntegrator.h")

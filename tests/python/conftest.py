@@ -1,0 +1,34 @@
+"""Shared fixtures of the Python tests. Run through ctest (PythonTests), which puts the
+build tree's package on PYTHONPATH."""
+import os
+
+import openmm
+import pytest
+
+import mrattle
+
+
+def pytest_sessionstart(session):
+    # Under ctest the package must be the build tree's, not some installed copy.
+    expected = os.environ.get('MRATTLE_EXPECT_PACKAGE_DIR')
+    if expected and os.path.realpath(os.path.dirname(mrattle.__file__)) != os.path.realpath(expected):
+        raise pytest.UsageError('imported mrattle from %s, expected %s' % (mrattle.__file__, expected))
+
+
+@pytest.fixture(params=['Reference', 'CPU'])
+def platform(request):
+    """Each platform the plugin's kernels run on."""
+    return openmm.Platform.getPlatformByName(request.param)
+
+
+def platformProperties(platform):
+    """One CPU thread: deterministic sums, and the machine is shared."""
+    return {'Threads': '1'} if platform.getName() == 'CPU' else {}
+
+
+def makeContext(system, integrator, platform, positions, velocities=None):
+    context = openmm.Context(system, integrator, platform, platformProperties(platform))
+    context.setPositions(positions)
+    if velocities is not None:
+        context.setVelocities(velocities)
+    return context
