@@ -1,10 +1,13 @@
 #include "TestSupport.h"
+#include "openmm/OpenMMException.h"
 #include <cmath>
 #include <mutex>
+#include <random>
 
 extern "C" void registerMRattleReferenceKernelFactories();
 
 using namespace OpenMM;
+using std::vector;
 
 namespace MRattleTest {
 
@@ -21,24 +24,51 @@ Platform& platform(const std::string& name) {
     return Platform::getPlatformByName(name);
 }
 
+namespace {
+
+void addSite(Molecule& m, const Vec3& position, double mass, double charge, double sigma, double epsilon) {
+    m.sites.push_back(position);
+    m.masses.push_back(mass);
+    m.charges.push_back(charge);
+    m.sigmas.push_back(sigma);
+    m.epsilons.push_back(epsilon);
+}
+
+/** Shift the sites so that their centre of mass is the origin. */
+void centerOnMass(Molecule& m) {
+    Vec3 center;
+    double total = 0;
+    for (size_t i = 0; i < m.sites.size(); i++) {
+        center += m.sites[i] * m.masses[i];
+        total += m.masses[i];
+    }
+    for (Vec3& s : m.sites)
+        s -= center / total;
+}
+
+vector<Vec3> rotationFrom(std::mt19937& generator) {
+    // A normalised 4D Gaussian is a uniform unit quaternion, hence a uniform rotation.
+    std::normal_distribution<double> gaussian(0.0, 1.0);
+    double w = gaussian(generator), x = gaussian(generator), y = gaussian(generator), z = gaussian(generator);
+    double norm = std::sqrt(w * w + x * x + y * y + z * z);
+    w /= norm, x /= norm, y /= norm, z /= norm;
+    return {Vec3(1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y)),
+            Vec3(2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x)),
+            Vec3(2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y))};
+}
+
+} // namespace
+
 Molecule benzene() {
     Molecule m;
     const double cc = 0.1397, ch = 0.1084;
     for (int k = 0; k < 6; k++) {
         double angle = k * M_PI / 3;
-        m.sites.push_back(Vec3(cc * std::cos(angle), cc * std::sin(angle), 0));
-        m.masses.push_back(12.011);
-        m.charges.push_back(-0.115);
-        m.sigmas.push_back(0.355);
-        m.epsilons.push_back(0.29288);
+        addSite(m, Vec3(cc * std::cos(angle), cc * std::sin(angle), 0), 12.011, -0.115, 0.355, 0.29288);
     }
     for (int k = 0; k < 6; k++) {
         double angle = k * M_PI / 3;
-        m.sites.push_back(Vec3((cc + ch) * std::cos(angle), (cc + ch) * std::sin(angle), 0));
-        m.masses.push_back(1.008);
-        m.charges.push_back(0.115);
-        m.sigmas.push_back(0.242);
-        m.epsilons.push_back(0.12552);
+        addSite(m, Vec3((cc + ch) * std::cos(angle), (cc + ch) * std::sin(angle), 0), 1.008, 0.115, 0.242, 0.12552);
     }
     for (int k = 0; k < 6; k++) {
         m.bonds.push_back({k, (k + 1) % 6});
@@ -47,8 +77,138 @@ Molecule benzene() {
     return m;
 }
 
-double maxDistanceChange(const std::vector<Vec3>& a, const std::vector<Vec3>& b,
-                         const std::vector<std::vector<int> >& bodies) {
+Molecule tetrahedral() {
+    Molecule m;
+    const double s = 1 / std::sqrt(3.0);
+    addSite(m, Vec3(0, 0, 0), 12.011, 0.2, 0.34, 0.35);                      // C
+    addSite(m, Vec3(s, s, s) * 0.109, 1.008, 0.05, 0.25, 0.125);              // H
+    addSite(m, Vec3(s, -s, -s) * 0.109, 2.014, 0.05, 0.25, 0.125);            // D
+    addSite(m, Vec3(-s, s, -s) * 0.135, 18.998, -0.15, 0.295, 0.2);           // F
+    addSite(m, Vec3(-s, -s, s) * 0.177, 35.453, -0.15, 0.34, 1.2);            // Cl
+    for (int k = 1; k < 5; k++)
+        m.bonds.push_back({0, k});
+    centerOnMass(m);
+    return m;
+}
+
+Molecule water() {
+    Molecule m;
+    const double oh = 0.09572, halfAngle = 0.5 * 104.52 * M_PI / 180;
+    addSite(m, Vec3(0, 0, 0), 15.999, -0.834, 0.315061, 0.636386);
+    addSite(m, Vec3(oh * std::sin(halfAngle), oh * std::cos(halfAngle), 0), 1.008, 0.417, 0.1, 0.0);
+    addSite(m, Vec3(-oh * std::sin(halfAngle), oh * std::cos(halfAngle), 0), 1.008, 0.417, 0.1, 0.0);
+    m.bonds.push_back({0, 1});
+    m.bonds.push_back({0, 2});
+    centerOnMass(m);
+    return m;
+}
+
+vector<Vec3> randomRotation(unsigned int seed) {
+    std::mt19937 generator(seed);
+    return rotationFrom(generator);
+}
+
+Vec3 rotate(const vector<Vec3>& rotation, const Vec3& v) {
+    return Vec3(rotation[0].dot(v), rotation[1].dot(v), rotation[2].dot(v));
+}
+
+vector<vector<int> > moleculeIndices(int numMolecules, int sitesPerMolecule) {
+    vector<vector<int> > molecules(numMolecules);
+    for (int m = 0; m < numMolecules; m++)
+        for (int i = 0; i < sitesPerMolecule; i++)
+            molecules[m].push_back(m * sitesPerMolecule + i);
+    return molecules;
+}
+
+Cluster buildCluster(const Molecule& molecule, int n, double spacing, unsigned int seed, const ClusterOptions& options) {
+    Cluster c;
+    c.system.reset(new System());
+    System& system = *c.system;
+    const int sites = molecule.sites.size();
+    const int numMolecules = n * n * n;
+    c.molecules = moleculeIndices(numMolecules, sites);
+    std::mt19937 generator(seed);
+    const double offset = 0.5 * (n - 1) * spacing;
+    for (int i = 0; i < n; i++)
+        for (int j = 0; j < n; j++)
+            for (int k = 0; k < n; k++) {
+                Vec3 center(i * spacing - offset, j * spacing - offset, k * spacing - offset);
+                vector<Vec3> placed;
+                bool clear = false;
+                for (int attempt = 0; attempt < 1000 && !clear; attempt++) {
+                    vector<Vec3> rotation = rotationFrom(generator);
+                    placed.clear();
+                    for (const Vec3& s : molecule.sites)
+                        placed.push_back(center + rotate(rotation, s));
+                    clear = true;
+                    for (size_t p = 0; p < c.positions.size() && clear; p++)
+                        for (const Vec3& q : placed) {
+                            Vec3 d = c.positions[p] - q;
+                            if (d.dot(d) < options.minSiteDistance * options.minSiteDistance) {
+                                clear = false;
+                                break;
+                            }
+                        }
+                }
+                if (!clear)
+                    throw OpenMMException("buildCluster: no orientation without overlaps at lattice spacing " +
+                                          std::to_string(spacing));
+                c.positions.insert(c.positions.end(), placed.begin(), placed.end());
+            }
+    for (int m = 0; m < numMolecules; m++)
+        for (int i = 0; i < sites; i++)
+            system.addParticle(molecule.masses[i]);
+    if (options.method != NonbondedForce::NoCutoff) {
+        double edge = n * spacing;
+        system.setDefaultPeriodicBoxVectors(Vec3(edge, 0, 0), Vec3(0, edge, 0), Vec3(0, 0, edge));
+    }
+    if (options.bonds && !molecule.bonds.empty()) {
+        HarmonicBondForce* bonds = new HarmonicBondForce();
+        for (int m = 0; m < numMolecules; m++)
+            for (const auto& bond : molecule.bonds) {
+                Vec3 d = molecule.sites[bond.first] - molecule.sites[bond.second];
+                bonds->addBond(m * sites + bond.first, m * sites + bond.second, std::sqrt(d.dot(d)), 1e5);
+            }
+        system.addForce(bonds);
+    }
+    if (options.nonbonded) {
+        NonbondedForce* nonbonded = new NonbondedForce();
+        nonbonded->setNonbondedMethod(options.method);
+        nonbonded->setCutoffDistance(options.cutoff);
+        for (int m = 0; m < numMolecules; m++)
+            for (int i = 0; i < sites; i++)
+                nonbonded->addParticle(options.charges ? molecule.charges[i] : 0.0, molecule.sigmas[i], molecule.epsilons[i]);
+        for (const vector<int>& members : c.molecules)
+            for (int i = 0; i < sites; i++)
+                for (int j = i + 1; j < sites; j++)
+                    nonbonded->addException(members[i], members[j], 0.0, 1.0, 0.0);
+        system.addForce(nonbonded);
+    }
+    return c;
+}
+
+vector<double> masses(const System& system) {
+    vector<double> result(system.getNumParticles());
+    for (int i = 0; i < system.getNumParticles(); i++)
+        result[i] = system.getParticleMass(i);
+    return result;
+}
+
+Vec3 totalMomentum(const vector<double>& masses, const vector<Vec3>& velocities) {
+    Vec3 p;
+    for (size_t i = 0; i < velocities.size(); i++)
+        p += velocities[i] * masses[i];
+    return p;
+}
+
+Vec3 angularMomentum(const vector<double>& masses, const vector<Vec3>& positions, const vector<Vec3>& velocities) {
+    Vec3 l;
+    for (size_t i = 0; i < velocities.size(); i++)
+        l += positions[i].cross(velocities[i]) * masses[i];
+    return l;
+}
+
+double maxDistanceChange(const vector<Vec3>& a, const vector<Vec3>& b, const vector<vector<int> >& bodies) {
     double worst = 0;
     for (const auto& body : bodies)
         for (size_t i = 0; i < body.size(); i++)
@@ -57,6 +217,39 @@ double maxDistanceChange(const std::vector<Vec3>& a, const std::vector<Vec3>& b,
                 worst = std::max(worst, std::fabs(std::sqrt(da.dot(da)) - std::sqrt(db.dot(db))));
             }
     return worst;
+}
+
+double maxDeviation(const vector<Vec3>& a, const vector<Vec3>& b) {
+    double worst = 0;
+    for (size_t i = 0; i < a.size(); i++) {
+        Vec3 d = a[i] - b[i];
+        worst = std::max(worst, std::sqrt(d.dot(d)));
+    }
+    return worst;
+}
+
+double mean(const vector<double>& values) {
+    double sum = 0;
+    for (double v : values)
+        sum += v;
+    return sum / values.size();
+}
+
+double standardDeviation(const vector<double>& values) {
+    double average = mean(values), sum = 0;
+    for (double v : values)
+        sum += (v - average) * (v - average);
+    return std::sqrt(sum / values.size());
+}
+
+double linearSlope(const vector<double>& values) {
+    const double n = values.size(), meanIndex = 0.5 * (n - 1), average = mean(values);
+    double covariance = 0, variance = 0;
+    for (size_t i = 0; i < values.size(); i++) {
+        covariance += (i - meanIndex) * (values[i] - average);
+        variance += (i - meanIndex) * (i - meanIndex);
+    }
+    return covariance / variance;
 }
 
 } // namespace MRattleTest

@@ -3,6 +3,7 @@
 
 #include "MRattleIntegrator.h"
 #include "OpenMM.h"
+#include <map>
 #include <memory>
 #include <string>
 #include <vector>
@@ -24,9 +25,78 @@ struct Molecule {
 /** Benzene: 12 sites, C-C 0.1397 nm, C-H 0.1084 nm, OPLS-AA-like C and H. Planar. */
 Molecule benzene();
 
+/**
+ * A non-planar 5-site molecule like CHDFCl: a centre bonded to 4 sites in tetrahedral
+ * directions at different distances, all five masses distinct (three distinct principal
+ * moments). Neutral. Sites are about the centre of mass.
+ */
+Molecule tetrahedral();
+
+/** Rigid 3-site water, TIP3P geometry (O-H 0.09572 nm, H-O-H 104.52 degrees) and parameters. */
+Molecule water();
+
+/** Options of buildCluster(). */
+struct ClusterOptions {
+    /** Add a HarmonicBondForce on the molecule's bonds (at their initial lengths), so OpenMM sees molecules. */
+    bool bonds = true;
+    /** Add a NonbondedForce (LJ + charges) between molecules, all pairs inside a molecule excluded. */
+    bool nonbonded = true;
+    /** Charges in the NonbondedForce (else zero). */
+    bool charges = true;
+    /** NoCutoff (vacuum) or a periodic method (the box is then n * spacing on each side). */
+    OpenMM::NonbondedForce::NonbondedMethod method = OpenMM::NonbondedForce::NoCutoff;
+    double cutoff = 1.0;
+    /** Smallest distance (nm) allowed between sites of different molecules; orientations are redrawn until met. */
+    double minSiteDistance = 0.22;
+};
+
+/** A System of identical molecules with their positions and the particles of each molecule. */
+struct Cluster {
+    std::unique_ptr<OpenMM::System> system;
+    std::vector<OpenMM::Vec3> positions;
+    std::vector<std::vector<int> > molecules;
+};
+
+/**
+ * n x n x n copies of a molecule on a cubic lattice of the given spacing (nm), centred on
+ * the origin, each in a random orientation drawn from the seed. An orientation that brings
+ * two sites of different molecules closer than options.minSiteDistance is redrawn.
+ *
+ * Nonbonded interactions use OpenMM's NonbondedForce with per-particle sigma and epsilon:
+ * its combination is Lorentz-Berthelot (arithmetic sigma, geometric epsilon). The tests only
+ * need some smooth intermolecular force, so the exact combination rule does not matter.
+ */
+Cluster buildCluster(const Molecule& molecule, int n, double spacing, unsigned int seed,
+                     const ClusterOptions& options = ClusterOptions());
+
+/** Particle indices of numMolecules consecutive molecules of sitesPerMolecule sites each. */
+std::vector<std::vector<int> > moleculeIndices(int numMolecules, int sitesPerMolecule);
+
+/** A uniformly distributed random rotation matrix (rows) from the generator's seed. */
+std::vector<OpenMM::Vec3> randomRotation(unsigned int seed);
+/** rotation * v for a rotation returned by randomRotation(). */
+OpenMM::Vec3 rotate(const std::vector<OpenMM::Vec3>& rotation, const OpenMM::Vec3& v);
+
+/** Particle masses of a System. */
+std::vector<double> masses(const OpenMM::System& system);
+/** Total linear momentum sum m_i v_i. */
+OpenMM::Vec3 totalMomentum(const std::vector<double>& masses, const std::vector<OpenMM::Vec3>& velocities);
+/** Total angular momentum sum m_i x_i x v_i about the origin (space frame). */
+OpenMM::Vec3 angularMomentum(const std::vector<double>& masses, const std::vector<OpenMM::Vec3>& positions,
+                             const std::vector<OpenMM::Vec3>& velocities);
+
 /** Largest change of any intra-body distance between two configurations. */
 double maxDistanceChange(const std::vector<OpenMM::Vec3>& a, const std::vector<OpenMM::Vec3>& b,
                          const std::vector<std::vector<int> >& bodies);
+
+/** Largest |a_i - b_i| over all particles. */
+double maxDeviation(const std::vector<OpenMM::Vec3>& a, const std::vector<OpenMM::Vec3>& b);
+
+/** Mean and population standard deviation of a series. */
+double mean(const std::vector<double>& values);
+double standardDeviation(const std::vector<double>& values);
+/** Slope of the least-squares line through (i, values[i]), per sample. */
+double linearSlope(const std::vector<double>& values);
 
 } // namespace MRattleTest
 
