@@ -1,0 +1,63 @@
+"""Temperatures with the rigid-body degrees of freedom."""
+import io
+
+import numpy as np
+import openmm
+import pytest
+from openmm import app, unit
+
+import mrattle
+from conftest import platformProperties
+
+
+def reportedRows(simulation, reporter, log, steps):
+    simulation.reporters.append(reporter)
+    simulation.step(steps)
+    return np.array([[float(value) for value in line.split(',')] for line in log.getvalue().splitlines()[1:]])
+
+
+@pytest.mark.parametrize('removeMotion', [False, True])
+def test_reporter_temperature_is_2ke_over_dof_kb(platform, removeMotion):
+    model = mrattle.models.benzeneCluster(temperature=200*unit.kelvin)
+    system = model.system
+    if removeMotion:
+        system.addForce(openmm.CMMotionRemover())
+    integrator = mrattle.MRattleIntegrator(2*unit.femtoseconds)
+    simulation = app.Simulation(model.topology, system, integrator, platform, platformProperties(platform))
+    simulation.context.setPositions(model.positions)
+    simulation.context.setVelocities(model.velocities)
+    log = io.StringIO()
+    rows = reportedRows(simulation, mrattle.StateDataReporter(log, 4, kineticEnergy=True, temperature=True), log, 12)
+    assert len(rows) == 3
+    dof = 6*27 - (3 if removeMotion else 0)
+    assert integrator.getNumDegreesOfFreedom() == dof
+    assert mrattle.degreesOfFreedom(simulation) == dof
+    boltzmann = unit.MOLAR_GAS_CONSTANT_R.value_in_unit(unit.kilojoules_per_mole/unit.kelvin)
+    np.testing.assert_allclose(rows[:, 1], 2*rows[:, 0]/(dof*boltzmann), rtol=1e-12)
+    # OpenMM's own reporter counts 3 per atom minus constraints: 324 atoms here.
+    openmmDof = 3*324 - (3 if removeMotion else 0)
+    openmmLog = io.StringIO()
+    openmmRows = reportedRows(simulation, app.StateDataReporter(openmmLog, 4, kineticEnergy=True, temperature=True),
+                              openmmLog, 4)
+    np.testing.assert_allclose(openmmRows[:, 1], 2*openmmRows[:, 0]/(openmmDof*boltzmann), rtol=1e-12)
+    kinetic = simulation.context.getState(getEnergy=True).getKineticEnergy()
+    assert mrattle.kineticTemperature(simulation).value_in_unit(unit.kelvin) == \
+        pytest.approx(2*kinetic.value_in_unit(unit.kilojoules_per_mole)/(dof*boltzmann), rel=1e-12)
+
+
+def test_builder_velocities_are_at_the_temperature():
+    model = mrattle.models.benzeneCluster(temperature=123*unit.kelvin, seed=4)
+    integrator = mrattle.MRattleIntegrator(0.002)
+    context = openmm.Context(model.system, integrator, openmm.Platform.getPlatformByName('Reference'))
+    context.setPositions(model.positions)
+    context.setVelocities(model.velocities)
+    assert mrattle.kineticTemperature(context).value_in_unit(unit.kelvin) == pytest.approx(123, rel=1e-10)
+
+
+def test_other_integrators_use_openmm_count():
+    system = openmm.System()
+    for i in range(3):
+        system.addParticle(1.0)
+    system.addConstraint(0, 1, 0.1)
+    context = openmm.Context(system, openmm.VerletIntegrator(0.001), openmm.Platform.getPlatformByName('Reference'))
+    assert mrattle.degreesOfFreedom(context) == 8
