@@ -1,0 +1,340 @@
+/*
+ * step_cost: wall-clock time of one integration step with forces excluded, on OpenMM's
+ * Reference and CPU platforms, for N rigid bodies of k atoms:
+ *
+ *   verlet             VerletIntegrator, no constraints (the floor: atoms move freely)
+ *   mrattle            MRattleIntegrator, bodies declared with addRigidBody
+ *   mrattle_allpairs   the same with all k(k-1)/2 intra-body pair constraints declared
+ *                      in the System (ignored by M-RATTLE; must cost nothing)
+ *   splitting          RigidSplittingIntegrator (the symplectic splitting baseline)
+ *   verlet_ccma        VerletIntegrator with 9 of the 10 pair distances of the
+ *                      tetrahedral k = 5 body constrained (OpenMM's own way: CCMA)
+ *
+ * The only force is a CustomExternalForce with a zero coefficient on one particle, so the
+ * step cost is the integrator's own. Each configuration is timed in `repeats` batches
+ * of steps, interleaved across the integrators of one (platform, k, N) so that the ratios
+ * of one run see the same machine load; the median per-step time is reported.
+ *
+ * Usage: step_cost [--out FILE] [--ratios FILE] [--platforms Reference,CPU]
+ *                  [--bodies 100,300,1000,3000] [--atoms 3,5,12,30] [--repeats 7]
+ *                  [--batch-seconds 0.05] [--threads 1]
+ *                  [--integrators verlet,mrattle,splitting,mrattle_allpairs,verlet_ccma]
+ * Timings go to --out (default stdout) as CSV; the speed-target ratios to --ratios
+ * (default stderr) as CSV.
+ */
+#include "BenchmarkShapes.h"
+#include "MRattleIntegrator.h"
+#include "OpenMM.h"
+#include "RigidSplittingIntegrator.h"
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdlib>
+#include <fstream>
+#include <iostream>
+#include <map>
+#include <set>
+#include <memory>
+#include <sstream>
+#include <string>
+#include <vector>
+
+extern "C" void registerMRattleReferenceKernelFactories();
+
+using namespace OpenMM;
+using std::string;
+using std::vector;
+
+namespace {
+
+struct Options {
+    string out, ratios;
+    vector<string> platforms = {"Reference", "CPU"};
+    vector<int> bodies = {100, 300, 1000, 3000};
+    vector<int> atoms = {3, 5, 12, 30};
+    vector<string> integrators;  // empty: all
+    int repeats = 7;
+    double batchSeconds = 0.05;
+    int threads = 1;
+};
+
+vector<string> split(const string& text) {
+    vector<string> parts;
+    std::stringstream stream(text);
+    string part;
+    while (std::getline(stream, part, ','))
+        if (!part.empty())
+            parts.push_back(part);
+    return parts;
+}
+
+vector<int> splitInts(const string& text) {
+    vector<int> values;
+    for (const string& part : split(text))
+        values.push_back(std::stoi(part));
+    return values;
+}
+
+Options parse(int argc, char** argv) {
+    Options options;
+    for (int i = 1; i < argc; i++) {
+        string flag = argv[i];
+        if (i + 1 >= argc)
+            throw std::runtime_error("step_cost: " + flag + " needs a value");
+        string value = argv[++i];
+        if (flag == "--out")
+            options.out = value;
+        else if (flag == "--ratios")
+            options.ratios = value;
+        else if (flag == "--platforms")
+            options.platforms = split(value);
+        else if (flag == "--bodies")
+            options.bodies = splitInts(value);
+        else if (flag == "--atoms")
+            options.atoms = splitInts(value);
+        else if (flag == "--repeats")
+            options.repeats = std::stoi(value);
+        else if (flag == "--batch-seconds")
+            options.batchSeconds = std::stod(value);
+        else if (flag == "--integrators")
+            options.integrators = split(value);
+        else if (flag == "--threads")
+            options.threads = std::stoi(value);
+        else
+            throw std::runtime_error("step_cost: unknown option " + flag);
+    }
+    if (options.repeats < 1 || options.batchSeconds <= 0)
+        throw std::runtime_error("step_cost: --repeats must be >= 1 and --batch-seconds > 0");
+    return options;
+}
+
+/** Pair constraints of one body: none, 9 of 10 (tetrahedron, for CCMA) or all pairs. */
+enum class Pairs { None, Rigidifying, All };
+
+struct Variant {
+    string name;
+    Pairs pairs;
+};
+
+/** One configuration being timed: its own System, Integrator and Context. */
+struct Run {
+    string name;
+    int constraintsPerBody = 0;
+    std::unique_ptr<System> system;
+    std::unique_ptr<Integrator> integrator;
+    std::unique_ptr<Context> context;
+    vector<double> secondsPerStep;
+};
+
+/**
+ * OpenMM's CCMA couples two constraints that share an atom through the angle between
+ * them, which it takes from a closing constraint or else from a HarmonicAngleForce; with
+ * neither it diverges (NaN in the first step for the 9-constraint tetrahedron). So give it
+ * every such angle, with zero force constant, in force group 1, which the integrator is
+ * told not to evaluate: the angles inform CCMA and cost nothing per step.
+ */
+void addConstraintAngles(System& system, const MRattleBenchmark::Shape& shape, int numBodies) {
+    const int k = shape.masses.size();
+    std::set<std::pair<int, int> > constrained;
+    for (int c = 0; c < system.getNumConstraints() && c < numBodies * k * k; c++) {
+        int p1, p2;
+        double distance;
+        system.getConstraintParameters(c, p1, p2, distance);
+        if (p1 >= k)
+            break;  // every body is constrained alike: the first one tells which pairs
+        constrained.insert({std::min(p1, p2), std::max(p1, p2)});
+    }
+    auto isConstrained = [&](int i, int j) { return constrained.count({std::min(i, j), std::max(i, j)}) > 0; };
+    auto site = [&](int i) { return Vec3(shape.sites[i][0], shape.sites[i][1], shape.sites[i][2]); };
+    HarmonicAngleForce* angles = new HarmonicAngleForce();
+    for (int b = 0; b < numBodies; b++)
+        for (int center = 0; center < k; center++)
+            for (int i = 0; i < k; i++)
+                for (int j = i + 1; j < k; j++) {
+                    if (i == center || j == center || !isConstrained(i, center) || !isConstrained(j, center) ||
+                        isConstrained(i, j))
+                        continue;
+                    Vec3 u = site(i) - site(center), w = site(j) - site(center);
+                    double angle = std::acos(u.dot(w) / std::sqrt(u.dot(u) * w.dot(w)));
+                    angles->addAngle(b * k + i, b * k + center, b * k + j, angle, 0.0);
+                }
+    angles->setForceGroup(1);
+    system.addForce(angles);
+}
+
+std::unique_ptr<System> buildSystem(int numBodies, const MRattleBenchmark::Shape& shape, Pairs pairs,
+                                    int& constraintsPerBody) {
+    std::unique_ptr<System> system(new System());
+    const int k = shape.masses.size();
+    constraintsPerBody = 0;
+    for (int b = 0; b < numBodies; b++) {
+        const int first = system->getNumParticles();
+        for (double m : shape.masses)
+            system->addParticle(m);
+        int count = 0;
+        for (int i = 0; i < k; i++)
+            for (int j = i + 1; j < k; j++) {
+                // Rigidifying: every pair of the tetrahedron but the first H-H (atoms 1-2).
+                bool keep = (pairs == Pairs::All) || (pairs == Pairs::Rigidifying && !(i == 1 && j == 2));
+                if (!keep)
+                    continue;
+                double d2 = 0;
+                for (int c = 0; c < 3; c++)
+                    d2 += (shape.sites[i][c] - shape.sites[j][c]) * (shape.sites[i][c] - shape.sites[j][c]);
+                system->addConstraint(first + i, first + j, std::sqrt(d2));
+                count++;
+            }
+        constraintsPerBody = count;
+    }
+    if (pairs == Pairs::Rigidifying)
+        addConstraintAngles(*system, shape, numBodies);
+    CustomExternalForce* negligible = new CustomExternalForce("0*x");
+    negligible->addParticle(0);
+    system->addForce(negligible);
+    return system;
+}
+
+vector<Vec3> buildPositions(int numBodies, const MRattleBenchmark::Shape& shape) {
+    // Bodies on a cubic lattice 1.2 nm apart (they never interact).
+    int side = 1;
+    while (side * side * side < numBodies)
+        side++;
+    vector<Vec3> positions;
+    for (int b = 0; b < numBodies; b++) {
+        Vec3 center(1.2 * (b % side), 1.2 * ((b / side) % side), 1.2 * (b / (side * side)));
+        for (const auto& site : shape.sites)
+            positions.push_back(center + Vec3(site[0], site[1], site[2]));
+    }
+    return positions;
+}
+
+double secondsFor(Integrator& integrator, int steps) {
+    auto start = std::chrono::steady_clock::now();
+    integrator.step(steps);
+    return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+}
+
+double median(vector<double> values) {
+    std::sort(values.begin(), values.end());
+    size_t n = values.size();
+    return n % 2 == 1 ? values[n / 2] : 0.5 * (values[n / 2 - 1] + values[n / 2]);
+}
+
+} // namespace
+
+int main(int argc, char** argv) {
+    try {
+        Options options = parse(argc, argv);
+        Platform::loadPluginsFromDirectory(Platform::getDefaultPluginsDirectory());
+        registerMRattleReferenceKernelFactories();
+        std::ofstream outFile, ratioFile;
+        if (!options.out.empty())
+            outFile.open(options.out);
+        if (!options.ratios.empty())
+            ratioFile.open(options.ratios);
+        std::ostream& out = options.out.empty() ? std::cout : outFile;
+        std::ostream& ratios = options.ratios.empty() ? std::cerr : ratioFile;
+        out << "platform,integrator,atoms_per_body,bodies,atoms,constraints_per_body,steps_per_batch,batches,"
+               "median_us_per_step,min_us_per_step,max_us_per_step,median_ns_per_atom_step,finite\n";
+        ratios << "platform,atoms_per_body,bodies,ratio,value,target,met\n";
+        for (const string& platformName : options.platforms) {
+            Platform& platform = Platform::getPlatformByName(platformName);
+            std::map<string, string> properties;
+            if (platformName == "CPU")
+                properties["Threads"] = std::to_string(options.threads);
+            for (int k : options.atoms) {
+                MRattleBenchmark::Shape shape = MRattleBenchmark::bodyShape(k);
+                vector<Variant> variants = {{"verlet", Pairs::None}, {"mrattle", Pairs::None}, {"splitting", Pairs::None}};
+                if (k == 5) {
+                    variants.push_back({"mrattle_allpairs", Pairs::All});
+                    variants.push_back({"verlet_ccma", Pairs::Rigidifying});
+                }
+                if (!options.integrators.empty())
+                    variants.erase(std::remove_if(variants.begin(), variants.end(),
+                                                  [&](const Variant& v) {
+                                                      return std::find(options.integrators.begin(),
+                                                                       options.integrators.end(),
+                                                                       v.name) == options.integrators.end();
+                                                  }),
+                                   variants.end());
+                for (int numBodies : options.bodies) {
+                    vector<Vec3> positions = buildPositions(numBodies, shape);
+                    vector<Run> runs;
+                    for (const Variant& variant : variants) {
+                        Run run;
+                        run.name = variant.name;
+                        run.system = buildSystem(numBodies, shape, variant.pairs, run.constraintsPerBody);
+                        if (variant.name.rfind("verlet", 0) == 0) {
+                            run.integrator.reset(new VerletIntegrator(0.002));
+                            run.integrator->setIntegrationForceGroups(1 << 0);
+                        }
+                        else {
+                            MRattlePlugin::RigidBodyIntegrator* rigid =
+                                (variant.name == "splitting")
+                                    ? (MRattlePlugin::RigidBodyIntegrator*) new MRattlePlugin::RigidSplittingIntegrator(0.002)
+                                    : (MRattlePlugin::RigidBodyIntegrator*) new MRattlePlugin::MRattleIntegrator(0.002);
+                            for (int b = 0; b < numBodies; b++) {
+                                vector<int> body;
+                                for (int j = 0; j < k; j++)
+                                    body.push_back(b * k + j);
+                                rigid->addRigidBody(body);
+                            }
+                            run.integrator.reset(rigid);
+                        }
+                        run.context.reset(new Context(*run.system, *run.integrator, platform, properties));
+                        run.context->setPositions(positions);
+                        run.context->setVelocitiesToTemperature(300, 1);
+                        runs.push_back(std::move(run));
+                    }
+                    // Warm up, then size the batches so each takes about batchSeconds.
+                    vector<int> steps;
+                    for (Run& run : runs) {
+                        run.integrator->step(5);
+                        double perStep = secondsFor(*run.integrator, 10) / 10;
+                        steps.push_back(std::max(1, (int) (options.batchSeconds / std::max(perStep, 1e-9))));
+                    }
+                    for (int r = 0; r < options.repeats; r++)
+                        for (size_t i = 0; i < runs.size(); i++)
+                            runs[i].secondsPerStep.push_back(secondsFor(*runs[i].integrator, steps[i]) / steps[i]);
+                    std::map<string, double> medians;
+                    const int numAtoms = numBodies * k;
+                    for (size_t i = 0; i < runs.size(); i++) {
+                        const Run& run = runs[i];
+                        double m = median(run.secondsPerStep);
+                        medians[run.name] = m;
+                        auto range = std::minmax_element(run.secondsPerStep.begin(), run.secondsPerStep.end());
+                        // A diverged run (NaN) is timed but flagged: its time means nothing.
+                        State state = run.context->getState(State::Positions | State::Energy, false, 1 << 0);
+                        bool finite = std::isfinite(state.getKineticEnergy());
+                        for (const Vec3& x : state.getPositions())
+                            finite = finite && std::isfinite(x[0] + x[1] + x[2]);
+                        out << platformName << ',' << run.name << ',' << k << ',' << numBodies << ',' << numAtoms << ','
+                            << run.constraintsPerBody << ',' << steps[i] << ',' << options.repeats << ',' << m * 1e6
+                            << ',' << *range.first * 1e6 << ',' << *range.second * 1e6 << ','
+                            << m * 1e9 / numAtoms << ',' << (finite ? "yes" : "no") << '\n';
+                    }
+                    out.flush();
+                    auto report = [&](const string& name, double value, const string& target, bool met) {
+                        if (!std::isfinite(value) || value == 0)
+                            return;  // an integrator of the ratio was not run
+                        ratios << platformName << ',' << k << ',' << numBodies << ',' << name << ',' << value << ','
+                               << target << ',' << (met ? "yes" : "no") << '\n';
+                    };
+                    double mr = medians["mrattle"];
+                    report("mrattle/verlet", mr / medians["verlet"], "<=2.0", mr / medians["verlet"] <= 2.0);
+                    report("mrattle/splitting", mr / medians["splitting"], "<=1.0", mr / medians["splitting"] <= 1.0);
+                    if (k == 5) {
+                        double ccma = medians["verlet_ccma"] / mr, pairs = medians["mrattle_allpairs"] / mr;
+                        report("verlet_ccma/mrattle", ccma, ">=20", ccma >= 20);
+                        report("mrattle_allpairs/mrattle", pairs, "<=1.10", pairs <= 1.10);
+                    }
+                    ratios.flush();
+                }
+            }
+        }
+    } catch (const std::exception& e) {
+        std::cerr << "step_cost: " << e.what() << std::endl;
+        return 1;
+    }
+    return 0;
+}
