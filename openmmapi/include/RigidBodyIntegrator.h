@@ -60,7 +60,25 @@ protected:
     }
     std::vector<OpenMM::Vec3> getVelocitiesForTemperature(const OpenMM::System& system, double temperature,
                                                           int randomSeed) const override;
+    /**
+     * Writes a header (format version, integrator kind, a signature of the bodies in
+     * effect) and then writeCheckpointState(). OpenMM calls it after writing the Context's
+     * own data (time, positions, velocities, box, random state).
+     */
+    void createCheckpoint(std::ostream& stream) const override;
+    /**
+     * Checks the header written by createCheckpoint(). OpenMM has already overwritten the
+     * Context's data when this is called, so on any mismatch (other bodies, another
+     * integrator, unknown format, truncated stream) the Context is put back as it was
+     * before loadCheckpoint() and an OpenMMException explains what is wrong.
+     */
     void loadCheckpoint(std::istream& stream) override;
+    /** State of a subclass to put in checkpoints, after the base class's header; none by default. */
+    virtual void writeCheckpointState(std::ostream& stream) const {
+    }
+    /** Read what writeCheckpointState() wrote; throw OpenMMException if it is malformed. */
+    virtual void readCheckpointState(std::istream& stream) {
+    }
 
     /** Throw unless bound to a Context. */
     void requireContext() const;
@@ -70,6 +88,8 @@ protected:
     void ensureForces();
     /** Compute forces at the current positions (after the positions moved). */
     void computeForces();
+    /** End of step(): remember the Context's state, which a failed loadCheckpoint() puts back. */
+    void endSteps();
 
     mutable OpenMM::Kernel kernel;
     RigidBodySet bodySet;
@@ -80,6 +100,19 @@ private:
     bool restoringCheckpoint = false;
     bool hasVelocityChangingForce = false;
     bool inProjection = false;
+
+    /** Recompute forces after making the platform rebuild what it caches from earlier positions. */
+    void refreshForceCaches();
+    /** A checkpoint of the whole Context at the last point it was known to be consistent. */
+    void saveRollbackState();
+    /** Load the rollback checkpoint; true on success. */
+    bool restoreRollbackState();
+    std::vector<char> rollbackState;
+    std::vector<std::string> rollbackParameterNames;
+    bool rollbackStateIsCurrent = false;
+    bool rollingBack = false;
+    bool takingRollbackState = false;
+    mutable bool refreshCachesBeforeStep = false;
 };
 
 } // namespace MRattlePlugin

@@ -23,4 +23,5 @@ void MRattleIntegrator::step(int steps) {
         computeForces();
         stepKernel.integrateVelocities(*context, *this);
     }
+    endSteps();
 }

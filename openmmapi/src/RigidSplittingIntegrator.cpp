@@ -23,4 +23,5 @@ void RigidSplittingIntegrator::step(int steps) {
         computeForces();
         stepKernel.integrateVelocities(*context, *this);
     }
+    endSteps();
 }
