@@ -138,8 +138,8 @@ def benzeneLiquid(numMolecules=64, density=0.8765*unit.grams/unit.milliliters, c
     volume = numMolecules*BENZENE_MOLAR_MASS/unit.AVOGADRO_CONSTANT_NA.value_in_unit(unit.mole**-1)/density*1e21
     edge = volume**(1/3)
     if 2*cutoff > edge:
-        raise ValueError('benzeneLiquid: the cutoff %g nm exceeds half the box edge %g nm; use more molecules '
-                         'or a shorter cutoff' % (cutoff, edge))
+        raise ValueError('benzeneLiquid: the cutoff %g nm exceeds half the box edge (%g nm); use more molecules '
+                         'or a shorter cutoff' % (cutoff, edge/2))
     random = np.random.default_rng(seed)
     centres = _latticeCentres(numMolecules, edge)
     coordinates = _placeRigidMolecules(benzeneSites(), centres, random, box=edge)
@@ -167,7 +167,8 @@ def waterBox(numMolecules=216, cutoff=0.9*unit.nanometers, density=0.997*unit.gr
     volume = numMolecules*molarMass/unit.AVOGADRO_CONSTANT_NA.value_in_unit(unit.mole**-1)/density*1e21
     edge = volume**(1/3)
     if 2*cutoff > edge:
-        raise ValueError('waterBox: the cutoff %g nm exceeds half the box edge %g nm' % (cutoff, edge))
+        raise ValueError('waterBox: the cutoff %g nm exceeds half the box edge (%g nm); use more molecules '
+                         'or a shorter cutoff' % (cutoff, edge/2))
     methods = {app.PME: openmm.NonbondedForce.PME, app.Ewald: openmm.NonbondedForce.Ewald,
                app.CutoffPeriodic: openmm.NonbondedForce.CutoffPeriodic}
     if nonbondedMethod not in methods:

@@ -1,0 +1,53 @@
+"""Each example script runs (a few steps, in a temporary folder) and writes what it promises."""
+import csv
+import os
+import subprocess
+import sys
+
+import pytest
+
+EXAMPLES = os.path.join(os.path.dirname(os.path.abspath(__file__)), '..', '..', 'examples')
+
+
+def runExample(name, tmp_path, *arguments):
+    command = [sys.executable, os.path.join(EXAMPLES, name), '--output', str(tmp_path/'out')] + list(arguments)
+    result = subprocess.run(command, cwd=str(tmp_path), stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+                            universal_newlines=True, timeout=300, env=dict(os.environ, OMP_NUM_THREADS='1'))
+    assert result.returncode == 0, result.stderr
+    return result
+
+
+def test_benzene_cluster(tmp_path):
+    result = runExample('benzene_cluster.py', tmp_path, '--steps', '40', '--report-interval', '10',
+                        '--platform', 'Reference')
+    out = tmp_path/'out'
+    assert sorted(os.listdir(str(out))) == ['cluster.pdb', 'energies.csv', 'energies.png', 'trajectory.dcd']
+    with open(str(out/'energies.csv')) as stream:
+        rows = list(csv.reader(stream))
+    assert [int(row[0]) for row in rows[1:]] == [10, 20, 30, 40]
+    assert os.path.getsize(str(out/'energies.png')) > 1000
+    assert os.path.getsize(str(out/'trajectory.dcd')) > 4*324*3*4
+    assert 'largest rigidity error' in result.stdout and 'ns/day' in result.stdout
+    assert '100%' in result.stderr  # the progress bar
+    # The rigidity error printed is tiny.
+    line = [l for l in result.stdout.splitlines() if l.startswith('largest rigidity error')][0]
+    assert float(line.split()[3]) < 1e-9
+
+
+def test_benzene_cluster_rejects_bad_arguments(tmp_path):
+    command = [sys.executable, os.path.join(EXAMPLES, 'benzene_cluster.py'), '--steps', '0']
+    result = subprocess.run(command, cwd=str(tmp_path), stdout=subprocess.PIPE, stderr=subprocess.PIPE)
+    assert result.returncode == 2 and b'must be positive' in result.stderr
+
+
+def test_water_box(tmp_path):
+    result = runExample('water_box.py', tmp_path, '--steps', '10', '--equilibration', '5', '--platform', 'CPU')
+    assert '895 rigid molecules, 5367 degrees of freedom' in result.stdout
+    assert os.path.isfile(str(tmp_path/'out'/'water.csv'))
+
+
+def test_liquid_benzene(tmp_path):
+    runExample('liquid_benzene.py', tmp_path, '--molecules', '27', '--cutoff', '0.7', '--steps', '20', '--platform', 'CPU')
+    out = tmp_path/'out'
+    for name in ('liquid_benzene.pdb', 'liquid_benzene.dcd', 'liquid_benzene.csv'):
+        assert os.path.getsize(str(out/name)) > 0
