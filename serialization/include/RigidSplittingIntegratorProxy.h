@@ -1,0 +1,24 @@
+#ifndef MRATTLE_RIGID_SPLITTING_INTEGRATOR_PROXY_H_
+#define MRATTLE_RIGID_SPLITTING_INTEGRATOR_PROXY_H_
+
+#include "openmm/serialization/SerializationProxy.h"
+#include "internal/windowsExportMRattle.h"
+
+namespace MRattlePlugin {
+
+/**
+ * XmlSerializer support for RigidSplittingIntegrator (type name "RigidSplittingIntegrator"). It is
+ * registered when libMRattlePlugin is loaded.
+ */
+class OPENMM_EXPORT_MRATTLE RigidSplittingIntegratorProxy : public OpenMM::SerializationProxy {
+public:
+    /** The version written; deserialize() reads versions 1 to this. */
+    static const int Version = 1;
+    RigidSplittingIntegratorProxy();
+    void serialize(const void* object, OpenMM::SerializationNode& node) const override;
+    void* deserialize(const OpenMM::SerializationNode& node) const override;
+};
+
+} // namespace MRattlePlugin
+
+#endif
