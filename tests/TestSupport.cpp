@@ -214,7 +214,11 @@ double maxDistanceChange(const vector<Vec3>& a, const vector<Vec3>& b, const vec
         for (size_t i = 0; i < body.size(); i++)
             for (size_t j = i + 1; j < body.size(); j++) {
                 Vec3 da = a[body[i]] - a[body[j]], db = b[body[i]] - b[body[j]];
-                worst = std::max(worst, std::fabs(std::sqrt(da.dot(da)) - std::sqrt(db.dot(db))));
+                {
+                    double change = std::fabs(std::sqrt(da.dot(da)) - std::sqrt(db.dot(db)));
+                    if (!(change <= worst))  // NaN propagates
+                        worst = change;
+                }
             }
     return worst;
 }
@@ -223,7 +227,9 @@ double maxDeviation(const vector<Vec3>& a, const vector<Vec3>& b) {
     double worst = 0;
     for (size_t i = 0; i < a.size(); i++) {
         Vec3 d = a[i] - b[i];
-        worst = std::max(worst, std::sqrt(d.dot(d)));
+        double distance = std::sqrt(d.dot(d));
+        if (!(distance <= worst))  // NaN propagates
+            worst = distance;
     }
     return worst;
 }
