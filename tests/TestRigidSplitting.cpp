@@ -39,14 +39,14 @@ void asymmetricBody(vector<Vec3>& sites, vector<double>& masses) {
  * together by springs between atoms of different bodies, at rest length 1.3x their
  * initial distance (so they start out of equilibrium and the forces do work).
  */
-struct Cluster {
+struct SpringCluster {
     System system;
     vector<Vec3> positions;
     vector<vector<int> > bodies;
 };
 
-Cluster springCluster() {
-    Cluster c;
+SpringCluster springCluster() {
+    SpringCluster c;
     vector<Vec3> sites;
     vector<double> masses;
     asymmetricBody(sites, masses);
@@ -82,7 +82,7 @@ void addBodies(IntegratorType& integrator, const vector<vector<int> >& bodies) {
 
 /** Largest |E(t) - E(0)| of the total energy over a run of the given duration. */
 double energyDeviation(double h, double duration) {
-    Cluster c = springCluster();
+    SpringCluster c = springCluster();
     RigidSplittingIntegrator integrator(h);
     addBodies(integrator, c.bodies);
     Context context(c.system, integrator, platform("Reference"));
@@ -103,7 +103,7 @@ double energyDeviation(double h, double duration) {
 /** Positions of the cluster after the given time, from the same initial state, with either integrator. */
 template <class IntegratorType>
 vector<Vec3> clusterPositionsAfter(double h, double duration) {
-    Cluster c = springCluster();
+    SpringCluster c = springCluster();
     IntegratorType integrator(h);
     addBodies(integrator, c.bodies);
     Context context(c.system, integrator, platform("Reference"));
@@ -245,7 +245,7 @@ TEST(RigidSplitting, ConvergesToMRattleAsStepShrinks) {
 }
 
 TEST(RigidSplitting, ClusterStaysRigid) {
-    Cluster c = springCluster();
+    SpringCluster c = springCluster();
     RigidSplittingIntegrator integrator(0.002);
     addBodies(integrator, c.bodies);
     Context context(c.system, integrator, platform("Reference"));
@@ -310,7 +310,7 @@ TEST(RigidSplitting, LinearBodyHasFiveDegreesOfFreedomAndStaysOnItsLine) {
 
 TEST(RigidSplitting, FreeParticleConstraintsAreKeptByRattle) {
     // A constrained diatomic of free particles beside a rigid body.
-    Cluster c = springCluster();
+    SpringCluster c = springCluster();
     int a = c.system.addParticle(14.0), b = c.system.addParticle(14.0);
     c.positions.push_back(Vec3(0, 0, 0.8));
     c.positions.push_back(Vec3(0.11, 0, 0.8));
@@ -336,7 +336,7 @@ TEST(RigidSplitting, FreeParticleConstraintsAreKeptByRattle) {
 }
 
 TEST(RigidSplitting, RestartFromCheckpointIsExact) {
-    Cluster c = springCluster();
+    SpringCluster c = springCluster();
     RigidSplittingIntegrator integrator(0.002);
     addBodies(integrator, c.bodies);
     Context context(c.system, integrator, platform("Reference"));
@@ -394,8 +394,41 @@ TEST(RigidSplitting, SharesBodySemanticsWithMRattle) {
     EXPECT_LT(maxDistanceChange(positions, x, splitting.getBodiesInEffect()), 1e-10);
 }
 
+TEST(RigidSplitting, LennardJonesClusterConservesEnergyLikeMRattle) {
+    // 8 non-planar molecules with LJ and charges (molecules are the bodies): both
+    // second-order integrators conserve energy to a similar, small fluctuation.
+    double fluctuation[2];
+    for (int method = 0; method < 2; method++) {
+        MRattleTest::Cluster c = buildCluster(tetrahedral(), 2, 0.5, 21);
+        std::unique_ptr<RigidBodyIntegrator> integrator;
+        if (method == 0)
+            integrator.reset(new RigidSplittingIntegrator(0.001));
+        else
+            integrator.reset(new MRattleIntegrator(0.001));
+        Context context(*c.system, *integrator, platform("Reference"));
+        context.setPositions(c.positions);
+        context.setVelocitiesToTemperature(200, 13);
+        EXPECT_EQ(8, integrator->getNumBodiesInEffect());
+        vector<double> energies;
+        for (int i = 0; i < 200; i++) {
+            integrator->step(5);
+            State s = context.getState(State::Energy);
+            energies.push_back(s.getKineticEnergy() + s.getPotentialEnergy());
+        }
+        vector<Vec3> x = context.getState(State::Positions).getPositions();
+        EXPECT_LT(maxDistanceChange(c.positions, x, c.molecules), 1e-10);
+        fluctuation[method] = standardDeviation(energies);
+        double kinetic = context.getState(State::Energy).getKineticEnergy();
+        EXPECT_LT(fluctuation[method], 1e-3 * kinetic) << "method " << method;
+        EXPECT_LT(std::fabs(linearSlope(energies)) * energies.size(), 3 * fluctuation[method]) << "drift, method " << method;
+    }
+    EXPECT_GT(fluctuation[0], 0.0);
+    EXPECT_LT(fluctuation[0], 10 * fluctuation[1]);
+    EXPECT_LT(fluctuation[1], 10 * fluctuation[0]);
+}
+
 TEST(RigidSplitting, WorksOnCpuPlatform) {
-    Cluster c = springCluster();
+    SpringCluster c = springCluster();
     RigidSplittingIntegrator integrator(0.002);
     addBodies(integrator, c.bodies);
     Context context(c.system, integrator, platform("CPU"));
@@ -407,7 +440,7 @@ TEST(RigidSplitting, WorksOnCpuPlatform) {
 }
 
 TEST(RigidSplitting, RejectsBadStepSize) {
-    Cluster c = springCluster();
+    SpringCluster c = springCluster();
     RigidSplittingIntegrator integrator(0.0);
     addBodies(integrator, c.bodies);
     Context context(c.system, integrator, platform("Reference"));
