@@ -45,7 +45,10 @@ PLUGIN_PATH = _loadKernelPlugin()
 from .reporters import StateDataReporter, degreesOfFreedom, kineticTemperature
 from .interactions import removeIntraBodyInteractions
 from . import models
+from .serialization import asPluginIntegrator, installXmlSerializerHooks as _installXmlSerializerHooks
+
+_installXmlSerializerHooks()
 
 
 __all__ = ['RigidBodyIntegrator', 'MRattleIntegrator', 'RigidSplittingIntegrator', 'StateDataReporter', 'degreesOfFreedom',
-           'kineticTemperature', 'removeIntraBodyInteractions', 'models', 'PLUGIN_PATH']
+           'kineticTemperature', 'removeIntraBodyInteractions', 'asPluginIntegrator', 'models', 'PLUGIN_PATH']

@@ -119,3 +119,18 @@ static PyObject* intListToPython(const std::vector<int>& values) {
 
 MRATTLE_INTEGRATOR(MRattleIntegrator, "MRattleIntegrator.h")
 MRATTLE_INTEGRATOR(RigidSplittingIntegrator, "RigidSplittingIntegrator.h")
+
+/*
+ * OpenMM's XmlSerializer returns deserialized integrators as plain openmm.Integrator
+ * proxies: this gives a new, non-owning proxy of the plugin's class for the same object
+ * (None for other integrators). The package moves the ownership over.
+ */
+%inline %{
+PyObject* _pluginIntegratorProxy(OpenMM::Integrator* integrator) {
+    if (MRattlePlugin::MRattleIntegrator* cast = dynamic_cast<MRattlePlugin::MRattleIntegrator*>(integrator))
+        return SWIG_NewPointerObj(SWIG_as_voidptr(cast), SWIGTYPE_p_MRattlePlugin__MRattleIntegrator, 0);
+    if (MRattlePlugin::RigidSplittingIntegrator* cast = dynamic_cast<MRattlePlugin::RigidSplittingIntegrator*>(integrator))
+        return SWIG_NewPointerObj(SWIG_as_voidptr(cast), SWIGTYPE_p_MRattlePlugin__RigidSplittingIntegrator, 0);
+    Py_RETURN_NONE;
+}
+%}

@@ -1,0 +1,46 @@
+"""XmlSerializer, copy and pickle of the plugin's integrators from Python."""
+import copy
+import pickle
+
+import numpy as np
+import openmm
+import pytest
+from openmm import unit
+
+import mrattle
+
+
+@pytest.mark.parametrize('cls', [mrattle.MRattleIntegrator, mrattle.RigidSplittingIntegrator])
+def test_round_trips_give_the_plugin_class(cls):
+    original = cls(1.5*unit.femtoseconds)
+    original.addRigidBody([0, 1, 2])
+    original.addRigidBody([3, 4])
+    original.setConstraintTolerance(1e-9)
+    original.setIntegrationForceGroups(0b11)
+    copies = [openmm.XmlSerializer.deserialize(openmm.XmlSerializer.serialize(original)),
+              openmm.XmlSerializer.clone(original), copy.deepcopy(original), copy.copy(original),
+              pickle.loads(pickle.dumps(original))]
+    for duplicate in copies:
+        assert type(duplicate) is cls
+        assert duplicate.getStepSize().value_in_unit(unit.femtoseconds) == pytest.approx(1.5, rel=1e-12)
+        assert duplicate.getConstraintTolerance() == 1e-9
+        assert duplicate.getIntegrationForceGroups() == 0b11
+        assert [duplicate.getRigidBodyParticles(i) for i in range(duplicate.getNumRigidBodies())] == [[0, 1, 2], [3, 4]]
+    # Other integrators are left alone.
+    assert type(openmm.XmlSerializer.clone(openmm.VerletIntegrator(0.001))) is openmm.VerletIntegrator
+    assert mrattle.asPluginIntegrator(5) == 5
+
+
+def test_deserialized_integrator_runs_the_same_trajectory():
+    model = mrattle.models.waterBox(numMolecules=27, cutoff=0.45*unit.nanometers)
+    reference = openmm.Platform.getPlatformByName('Reference')
+    results = []
+    for integrator in (mrattle.MRattleIntegrator(0.002),
+                       openmm.XmlSerializer.deserialize(openmm.XmlSerializer.serialize(mrattle.MRattleIntegrator(0.002)))):
+        context = openmm.Context(model.system, integrator, reference)
+        context.setPositions(model.positions)
+        context.setVelocitiesToTemperature(300, 3)
+        integrator.step(20)
+        assert integrator.getNumBodiesInEffect() == 27
+        results.append(context.getState(getPositions=True).getPositions(asNumpy=True).value_in_unit(unit.nanometers))
+    assert np.array_equal(results[0], results[1])
