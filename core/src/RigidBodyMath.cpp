@@ -113,7 +113,10 @@ bool isLinearShape(const Matrix3d& secondMoment) {
     return ev(1) <= 1e-12 * ev(2);
 }
 
-Matrix3d rotationFromVector(const Vector3d& d) {
+namespace {
+
+/** exp([d]x) - 1, kept apart from the identity so that small rotations lose no digits. */
+Matrix3d rotationMinusIdentity(const Vector3d& d) {
     double theta2 = d.squaredNorm();
     Matrix3d D = crossMatrix(d);
     double a, b;  // sin(t)/t and (1-cos(t))/t^2
@@ -125,38 +128,51 @@ Matrix3d rotationFromVector(const Vector3d& d) {
         a = std::sin(theta) / theta;
         b = (1.0 - std::cos(theta)) / theta2;
     }
-    return Matrix3d::Identity() + a * D + b * D * D;
+    return a * D + b * D * D;
+}
+
+} // namespace
+
+Matrix3d rotationFromVector(const Vector3d& d) {
+    return Matrix3d::Identity() + rotationMinusIdentity(d);
 }
 
 RotationSolve solveResetRotation(const Matrix3d& J, const Matrix3d& Y) {
+    return solveResetRotationForTorque(J, vexOfSkewPart(Y));
+}
+
+RotationSolve solveResetRotationForTorque(const Matrix3d& J, const Vector3d& target) {
+    // The rotation of one step is small, so P = 1 + Delta is carried as Delta: the residual
+    // vex(P J - J P^T) = vex(Delta J - J Delta^T) (J symmetric) then has round-off relative
+    // to the rotation itself, not to J, and the torque condition holds to that precision.
     RotationSolve result;
-    const Vector3d target = vexOfSkewPart(Y);
-    // |r| ~ tr(J) * (angle error): stop once the angle is at round-off.
-    const double scale = J.trace();
-    const double tolerance = 64 * std::numeric_limits<double>::epsilon() * scale;
-    Matrix3d& P = result.rotation;
-    for (int iteration = 0; iteration <= MaxRotationIterations; iteration++) {
-        Matrix3d PJ = P * J;
-        Vector3d r = vexOfSkewPart(PJ) - target;
-        if (r.norm() <= tolerance || scale == 0) {
+    result.iterations = MaxRotationIterations;
+    Matrix3d delta = Matrix3d::Zero();
+    for (int iteration = 0; iteration < MaxRotationIterations; iteration++) {
+        Matrix3d deltaJ = delta * J;
+        Vector3d r = vexOfSkewPart(deltaJ) - target;
+        if (r.isZero(0.0)) {
             result.iterations = iteration;
             result.converged = true;
-            return result;
-        }
-        if (iteration == MaxRotationIterations)
             break;
+        }
+        Matrix3d PJ = J + deltaJ;
         Matrix3d K = PJ.trace() * Matrix3d::Identity() - PJ;
         Vector3d d = -K.inverse() * r;
         if (!d.allFinite())
             break;
-        P = rotationFromVector(d) * P;
-        if (d.norm() < 1e-15) {  // the update no longer changes P: at round-off
+        Matrix3d E = rotationMinusIdentity(d);
+        delta = E + delta + E * delta;
+        // Newton converges quadratically: once the correction is this small against the
+        // rotation, the next would be below round-off.
+        if (d.norm() <= 1e-13 * delta.norm()) {
             result.iterations = iteration + 1;
             result.converged = true;
-            return result;
+            break;
         }
     }
-    result.iterations = MaxRotationIterations;
+    result.rotation = Matrix3d::Identity() + delta;
+    result.rotationMinusIdentity = delta;
     return result;
 }
 
@@ -164,25 +180,28 @@ RotationSolve resetBodyPositions(const BodyView& body, const double* oldPosition
     const Vector3d oldCenter = centerOfMass(body, oldPositions);
     const Vector3d newCenter = centerOfMass(body, newPositions);
     RotationSolve solve;
-    if (body.linear)
+    if (body.linear) {
         solve = solveLinearRotation(body, oldPositions, newPositions, oldCenter, newCenter);
-    else {
+        solve.rotationMinusIdentity = solve.rotation - Matrix3d::Identity();
+    } else {
+        // Torque target sum m a x y = sum m a x (y - a): formed from the small displacement.
         Matrix3d J = Matrix3d::Zero();
-        Matrix3d Y = Matrix3d::Zero();
+        Vector3d target = Vector3d::Zero();
         for (int k = 0; k < body.numAtoms; k++) {
             int atom = body.atoms[k];
             double m = body.masses[atom];
             Vector3d a = point(oldPositions, atom) - oldCenter;
             Vector3d ma = m * a;
             J.noalias() += ma * a.transpose();
-            Y.noalias() += (point(newPositions, atom) - newCenter) * ma.transpose();
+            target += ma.cross((point(newPositions, atom) - newCenter) - a);
         }
-        solve = solveResetRotation(J, Y);
+        solve = solveResetRotationForTorque(J, target);
     }
-    const Matrix3d& P = solve.rotation;
+    const Matrix3d& delta = solve.rotationMinusIdentity;
     for (int k = 0; k < body.numAtoms; k++) {
         int atom = body.atoms[k];
-        point(newPositions, atom) = newCenter + P * (point(oldPositions, atom) - oldCenter);
+        Vector3d a = point(oldPositions, atom) - oldCenter;
+        point(newPositions, atom) = newCenter + (a + delta * a);
     }
     return solve;
 }

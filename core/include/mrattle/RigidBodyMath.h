@@ -27,6 +27,7 @@ struct BodyView {
 /** Result of the rotation solve of one position reset. */
 struct RotationSolve {
     Eigen::Matrix3d rotation = Eigen::Matrix3d::Identity();
+    Eigen::Matrix3d rotationMinusIdentity = Eigen::Matrix3d::Zero();  // rotation - 1, without cancellation
     int iterations = 0;
     bool converged = false;
 };
@@ -57,6 +58,13 @@ Eigen::Matrix3d rotationFromVector(const Eigen::Vector3d& d);
  * Not for linear bodies (the Jacobian is singular there; see resetBodyPositions).
  */
 RotationSolve solveResetRotation(const Eigen::Matrix3d& J, const Eigen::Matrix3d& Y);
+
+/**
+ * The same solve given the torque target vex(Y - Y^T) = sum m_i a_i x y_i directly. Pass it
+ * formed from displacements, sum m_i a_i x (y_i - a_i), which is equal and keeps the
+ * digits of a small rotation (what resetBodyPositions does).
+ */
+RotationSolve solveResetRotationForTorque(const Eigen::Matrix3d& J, const Eigen::Vector3d& target);
 
 /**
  * M-RATTLE position reset of one body. oldPositions holds x at the start of the step;
