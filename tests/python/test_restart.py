@@ -1,0 +1,163 @@
+"""Saving and restarting from Python: Simulation.saveCheckpoint/loadCheckpoint (bit for bit,
+also in a new process, and refused when the bodies differ), saveState/loadState, and
+malformed integrator XML. (XmlSerializer round trips: test_serialization.py.)"""
+import os
+import subprocess
+import sys
+import textwrap
+
+import numpy as np
+import openmm
+import pytest
+from openmm import app, unit
+
+import mrattle
+from conftest import platformProperties
+
+STEPS_BEFORE, STEPS_AFTER = 20, 30
+
+
+def waterSimulation(platform, integrator=None):
+    """27 rigid waters in a periodic box with a cutoff (the CPU platform keeps a neighbour list)."""
+    model = mrattle.models.waterBox(numMolecules=27, cutoff=0.45*unit.nanometers)
+    if integrator is None:
+        integrator = mrattle.MRattleIntegrator(2*unit.femtoseconds)
+    simulation = app.Simulation(model.topology, model.system, integrator, platform, platformProperties(platform))
+    simulation.context.setPositions(model.positions)
+    simulation.context.setVelocitiesToTemperature(300*unit.kelvin, 5)
+    return simulation
+
+
+def stateArrays(simulation):
+    state = simulation.context.getState(getPositions=True, getVelocities=True)
+    return (state.getPositions(asNumpy=True).value_in_unit(unit.nanometers),
+            state.getVelocities(asNumpy=True).value_in_unit(unit.nanometers/unit.picoseconds),
+            state.getTime().value_in_unit(unit.picoseconds), state.getStepCount())
+
+
+def assertIdentical(expected, actual):
+    """Positions and velocities equal to the last bit, same time and step count."""
+    for e, a in zip(expected[:2], actual[:2]):
+        assert np.array_equal(e, a), 'differ by up to %g' % np.abs(e - a).max()
+    assert expected[2:] == actual[2:]
+
+
+def test_checkpoint_continues_bit_for_bit(platform, tmp_path):
+    simulation = waterSimulation(platform)
+    simulation.step(STEPS_BEFORE)
+    path = str(tmp_path/'run.chk')
+    simulation.saveCheckpoint(path)
+    simulation.step(STEPS_AFTER)
+    uninterrupted = stateArrays(simulation)
+    simulation.loadCheckpoint(path)
+    assert simulation.currentStep == STEPS_BEFORE
+    simulation.step(STEPS_AFTER)
+    assertIdentical(uninterrupted, stateArrays(simulation))
+    assert uninterrupted[3] == STEPS_BEFORE + STEPS_AFTER
+
+
+RESTART_SCRIPT = textwrap.dedent('''
+    import sys
+    import numpy as np
+    import openmm
+    from openmm import app, unit
+    import mrattle
+    platformName, checkpoint, output, steps = sys.argv[1], sys.argv[2], sys.argv[3], int(sys.argv[4])
+    model = mrattle.models.waterBox(numMolecules=27, cutoff=0.45*unit.nanometers)
+    platform = openmm.Platform.getPlatformByName(platformName)
+    properties = {'Threads': '1'} if platformName == 'CPU' else {}
+    simulation = app.Simulation(model.topology, model.system, mrattle.MRattleIntegrator(2*unit.femtoseconds),
+                                platform, properties)
+    simulation.loadCheckpoint(checkpoint)
+    simulation.step(steps)
+    state = simulation.context.getState(getPositions=True, getVelocities=True)
+    np.savez(output, positions=state.getPositions(asNumpy=True).value_in_unit(unit.nanometers),
+             velocities=state.getVelocities(asNumpy=True).value_in_unit(unit.nanometers/unit.picoseconds),
+             time=state.getTime().value_in_unit(unit.picoseconds), step=state.getStepCount())
+''')
+
+
+def test_checkpoint_restart_in_new_process_is_bit_for_bit(platform, tmp_path):
+    simulation = waterSimulation(platform)
+    simulation.step(STEPS_BEFORE)
+    checkpoint = str(tmp_path/'run.chk')
+    simulation.saveCheckpoint(checkpoint)
+    simulation.step(STEPS_AFTER)
+    uninterrupted = stateArrays(simulation)
+
+    script, output = tmp_path/'restart.py', str(tmp_path/'restarted.npz')
+    script.write_text(RESTART_SCRIPT)
+    result = subprocess.run([sys.executable, str(script), platform.getName(), checkpoint, output, str(STEPS_AFTER)],
+                            capture_output=True, text=True, env=dict(os.environ), timeout=300)
+    assert result.returncode == 0, result.stderr
+    restarted = np.load(output)
+    assertIdentical(uninterrupted, (restarted['positions'], restarted['velocities'], float(restarted['time']),
+                                    int(restarted['step'])))
+
+
+def test_checkpoint_with_other_bodies_is_refused_and_context_kept(tmp_path):
+    platform = openmm.Platform.getPlatformByName('Reference')
+    simulation = waterSimulation(platform)
+    simulation.step(5)
+    # Only the first 26 molecules rigid: the checkpoint's bodies differ from this Context's.
+    other = mrattle.MRattleIntegrator(2*unit.femtoseconds)
+    for molecule in range(26):
+        other.addRigidBody([3*molecule, 3*molecule + 1, 3*molecule + 2])
+    otherSimulation = waterSimulation(platform, other)
+    path = str(tmp_path/'other.chk')
+    otherSimulation.saveCheckpoint(path)
+    before = stateArrays(simulation)
+    with pytest.raises(openmm.OpenMMException, match='27 rigid bodies in effect.*has 26|26 rigid bodies in effect.*has 27'):
+        simulation.loadCheckpoint(path)
+    assertIdentical(before, stateArrays(simulation))
+    with pytest.raises(openmm.OpenMMException, match='truncated'):
+        simulation.context.loadCheckpoint(simulation.context.createCheckpoint()[:-5])
+    assertIdentical(before, stateArrays(simulation))
+
+
+def test_saved_state_continues_with_rigid_bodies(platform, tmp_path):
+    simulation = waterSimulation(platform)
+    simulation.step(STEPS_BEFORE)
+    path = str(tmp_path/'state.xml')
+    simulation.saveState(path)
+    saved = stateArrays(simulation)
+    simulation.step(STEPS_AFTER)
+    uninterrupted = stateArrays(simulation)
+
+    integrator = mrattle.MRattleIntegrator(2*unit.femtoseconds)
+    restored = waterSimulation(platform, integrator)
+    restored.loadState(path)
+    loaded = stateArrays(restored)
+    assert np.array_equal(saved[0], loaded[0])
+    # Velocities are projected onto rigid-body motion again: equal to round-off.
+    assert np.abs(saved[1] - loaded[1]).max() < 1e-12
+    assert loaded[3] == STEPS_BEFORE
+    restored.step(STEPS_AFTER)
+    continued = stateArrays(restored)
+    positions = continued[0]
+    for body in integrator.getBodiesInEffect():
+        for i in range(3):
+            for j in range(i + 1, 3):
+                d0 = np.linalg.norm(saved[0][body[i]] - saved[0][body[j]])
+                d1 = np.linalg.norm(positions[body[i]] - positions[body[j]])
+                assert abs(d1 - d0) < 1e-10
+    assert integrator.getNumDegreesOfFreedom() == 27*6
+    # The same trajectory but for the round-off of the projection (single precision on CPU).
+    tolerance = 1e-9 if platform.getName() == 'Reference' else 1e-5
+    assert np.abs(continued[0] - uninterrupted[0]).max() < tolerance
+
+
+def test_malformed_integrator_xml_is_refused():
+    xml = openmm.XmlSerializer.serialize(mrattle.MRattleIntegrator(0.002))
+    with pytest.raises(openmm.OpenMMException, match='unsupported version 7'):
+        openmm.XmlSerializer.deserialize(xml.replace('version="1"', 'version="7"'))
+    with pytest.raises(openmm.OpenMMException, match="'stepSize'.*fast"):
+        openmm.XmlSerializer.deserialize(xml.replace('stepSize=".002"', 'stepSize="fast"'))
+    withBody = xml.replace('<RigidBodies count="0"/>',
+                           '<RigidBodies count="1"><Body size="2"><Particle index="1"/><Particle index="-2"/>'
+                           '</Body></RigidBodies>')
+    assert withBody != xml
+    with pytest.raises(openmm.OpenMMException, match='Rigid body 0 lists particle -2'):
+        openmm.XmlSerializer.deserialize(withBody)
+    with pytest.raises(openmm.OpenMMException):
+        openmm.XmlSerializer.deserialize(xml[:len(xml)//2])
