@@ -63,7 +63,9 @@ protected:
     /**
      * Writes a header (format version, integrator kind, a signature of the bodies in
      * effect) and then writeCheckpointState(). OpenMM calls it after writing the Context's
-     * own data (time, positions, velocities, box, random state).
+     * own data (time, positions, velocities, box, random state). The next step first
+     * refreshes the platform's force caches (as loading does), so that this run and one
+     * continued from the checkpoint stay identical bit for bit.
      */
     void createCheckpoint(std::ostream& stream) const override;
     /**
@@ -88,7 +90,7 @@ protected:
     void ensureForces();
     /** Compute forces at the current positions (after the positions moved). */
     void computeForces();
-    /** End of step(): remember the Context's state, which a failed loadCheckpoint() puts back. */
+    /** Every step() calls this at its end: remember the Context's state, which a failed loadCheckpoint() puts back. */
     void endSteps();
 
     mutable OpenMM::Kernel kernel;
