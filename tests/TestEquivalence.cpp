@@ -22,26 +22,6 @@ using std::vector;
 
 namespace {
 
-/**
- * Velocity Verlet with RATTLE as a CustomIntegrator: half kick, drift, position constraint
- * (along the old bond vectors), velocity from the constrained displacement, half kick with
- * the new forces, velocity constraint.
- */
-CustomIntegrator* rattleIntegrator(double stepSize, double tolerance) {
-    CustomIntegrator* integrator = new CustomIntegrator(stepSize);
-    integrator->addPerDofVariable("x0", 0);
-    integrator->addUpdateContextState();
-    integrator->addComputePerDof("v", "v+0.5*dt*f/m");
-    integrator->addComputePerDof("x0", "x");
-    integrator->addComputePerDof("x", "x+dt*v");
-    integrator->addConstrainPositions();
-    integrator->addComputePerDof("v", "(x-x0)/dt");
-    integrator->addComputePerDof("v", "v+0.5*dt*f/m");
-    integrator->addConstrainVelocities();
-    integrator->setConstraintTolerance(tolerance);
-    return integrator;
-}
-
 struct DistanceConstraint {
     int i, j;
     double distance;
@@ -170,7 +150,7 @@ Comparison compare(Cluster& c, const vector<DistanceConstraint>& openmmConstrain
     EXPECT_EQ(c.molecules, mrattle.getBodiesInEffect());
     State start = mrattleContext.getState(State::Positions | State::Velocities);
 
-    CustomIntegrator* rattle = rattleIntegrator(stepSize, 1e-12);
+    CustomIntegrator* rattle = rattleVerletIntegrator(stepSize, 1e-12);
     Context rattleContext(system, *rattle, platform("Reference"));
     rattleContext.setPositions(start.getPositions());
     rattleContext.setVelocities(start.getVelocities());

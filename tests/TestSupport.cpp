@@ -187,6 +187,21 @@ Cluster buildCluster(const Molecule& molecule, int n, double spacing, unsigned i
     return c;
 }
 
+CustomIntegrator* rattleVerletIntegrator(double stepSize, double constraintTolerance) {
+    CustomIntegrator* integrator = new CustomIntegrator(stepSize);
+    integrator->addPerDofVariable("x0", 0);
+    integrator->addUpdateContextState();
+    integrator->addComputePerDof("v", "v+0.5*dt*f/m");
+    integrator->addComputePerDof("x0", "x");
+    integrator->addComputePerDof("x", "x+dt*v");
+    integrator->addConstrainPositions();
+    integrator->addComputePerDof("v", "(x-x0)/dt");
+    integrator->addComputePerDof("v", "v+0.5*dt*f/m");
+    integrator->addConstrainVelocities();
+    integrator->setConstraintTolerance(constraintTolerance);
+    return integrator;
+}
+
 vector<double> masses(const System& system) {
     vector<double> result(system.getNumParticles());
     for (int i = 0; i < system.getNumParticles(); i++)

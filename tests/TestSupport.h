@@ -77,6 +77,14 @@ std::vector<OpenMM::Vec3> randomRotation(unsigned int seed);
 /** rotation * v for a rotation returned by randomRotation(). */
 OpenMM::Vec3 rotate(const std::vector<OpenMM::Vec3>& rotation, const OpenMM::Vec3& v);
 
+/**
+ * Velocity Verlet with RATTLE as a CustomIntegrator, the independent reference for
+ * M-RATTLE: half kick, drift, constrain positions (along the old bond vectors), velocity
+ * from the constrained displacement, half kick with the new forces, constrain velocities.
+ * Without constraints it is plain velocity Verlet. The caller owns the result.
+ */
+OpenMM::CustomIntegrator* rattleVerletIntegrator(double stepSize, double constraintTolerance);
+
 /** Particle masses of a System. */
 std::vector<double> masses(const OpenMM::System& system);
 /** Total linear momentum sum m_i v_i. */
