@@ -76,10 +76,10 @@ protected:
      */
     void loadCheckpoint(std::istream& stream) override;
     /** State of a subclass to put in checkpoints, after the base class's header; none by default. */
-    virtual void writeCheckpointState(std::ostream& stream) const {
+    virtual void writeCheckpointState(std::ostream& /*stream*/) const {
     }
     /** Read what writeCheckpointState() wrote; throw OpenMMException if it is malformed. */
-    virtual void readCheckpointState(std::istream& stream) {
+    virtual void readCheckpointState(std::istream& /*stream*/) {
     }
 
     /** Throw unless bound to a Context. */
