@@ -44,3 +44,21 @@ def test_deserialized_integrator_runs_the_same_trajectory():
         assert integrator.getNumBodiesInEffect() == 27
         results.append(context.getState(getPositions=True).getPositions(asNumpy=True).value_in_unit(unit.nanometers))
     assert np.array_equal(results[0], results[1])
+
+
+def test_simulation_checkpoint_file(tmp_path):
+    model = mrattle.models.benzeneCluster()
+    from openmm import app
+    reference = openmm.Platform.getPlatformByName('Reference')
+    simulation = app.Simulation(model.topology, model.system, mrattle.MRattleIntegrator(0.002), reference)
+    simulation.context.setPositions(model.positions)
+    simulation.context.setVelocities(model.velocities)
+    simulation.step(5)
+    path = str(tmp_path/'state.chk')
+    simulation.saveCheckpoint(path)
+    simulation.step(10)
+    first = simulation.context.getState(getPositions=True).getPositions(asNumpy=True)
+    restarted = app.Simulation(model.topology, model.system, mrattle.MRattleIntegrator(0.002), reference)
+    restarted.loadCheckpoint(path)
+    restarted.step(10)
+    assert np.array_equal(restarted.context.getState(getPositions=True).getPositions(asNumpy=True), first)
