@@ -46,6 +46,9 @@ class ProgressBar(object):
     def __init__(self, totalSteps, interval, stream=sys.stderr, width=40):
         self.totalSteps, self.interval, self.stream, self.width = totalSteps, interval, stream, width
         self.startTime = time.time()
+        # Redrawing in place needs a terminal; in a log file, one line per 10%.
+        self.interactive = hasattr(stream, 'isatty') and stream.isatty()
+        self.lastTenth = -1
 
     def describeNextReport(self, simulation):
         return (self.interval - simulation.currentStep % self.interval, False, False, False, False)
@@ -55,10 +58,12 @@ class ProgressBar(object):
         filled = int(round(self.width*fraction))
         elapsed = time.time() - self.startTime
         remaining = elapsed*(1 - fraction)/fraction if fraction > 0 else 0
-        self.stream.write('\r[%s%s] %3.0f%%  %5.1f s left ' % ('#'*filled, '.'*(self.width - filled),
-                                                               100*fraction, remaining))
-        if simulation.currentStep >= self.totalSteps:
-            self.stream.write('\n')
+        bar = '[%s%s] %3.0f%%  %5.1f s left ' % ('#'*filled, '.'*(self.width - filled), 100*fraction, remaining)
+        if self.interactive:
+            self.stream.write('\r' + bar + ('\n' if simulation.currentStep >= self.totalSteps else ''))
+        elif int(10*fraction) > self.lastTenth:
+            self.lastTenth = int(10*fraction)
+            self.stream.write(bar + '\n')
         self.stream.flush()
 
 
