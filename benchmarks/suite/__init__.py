@@ -1,0 +1,1 @@
+"""The benchmark suite behind docs/results.md: accuracy, cost, sampling and user gains."""

@@ -1,0 +1,237 @@
+"""Accuracy: energy error against step size for M-RATTLE, splitting and OpenMM's own RATTLE."""
+import copy
+import math
+
+import numpy as np
+import openmm
+from openmm import unit
+
+import mrattle
+from . import common, stats
+
+
+def _copy(system):
+    return openmm.XmlSerializer.deserialize(openmm.XmlSerializer.serialize(system))
+
+
+def _positions(model):
+    return np.array(model.positions.value_in_unit(unit.nanometer))
+
+
+def _bodies(model):
+    return [list(range(12 * m, 12 * m + 12)) for m in range(model.system.getNumParticles() // 12)]
+
+
+def _angular_momentum(state, system):
+    x = state.getPositions(asNumpy=True).value_in_unit(unit.nanometer)
+    v = state.getVelocities(asNumpy=True).value_in_unit(unit.nanometer / unit.picosecond)
+    m = np.array([system.getParticleMass(i).value_in_unit(unit.dalton) for i in range(system.getNumParticles())])
+    return (m[:, None] * np.cross(x, v)).sum(0)
+
+
+def isolated_benzene(steps_fs, total_ps, log):
+    """Free rigid benzene: energy, angular momentum and trajectory error against a fine-step reference."""
+    model = mrattle.models.benzene()
+    x0 = _positions(model)
+    bodies = _bodies(model)
+    v0 = common.rigid_velocities(model.system, x0, bodies, 300.0, seed=3)
+    reference_step = min(steps_fs) / 16 * common.FS
+    # Sample every 32 fs: a whole number of steps for every step size, so all runs end at total_ps.
+    total_ps = max(1, round(total_ps / 0.032)) * 0.032
+    ref = common.nve_run(model.system, x0, v0, "M-RATTLE", reference_step, total_ps, total_ps, "Reference", bodies)
+    ref_positions = ref["context"].getState(getPositions=True).getPositions(asNumpy=True).value_in_unit(unit.nanometer)
+    rows = []
+    for method in ("M-RATTLE", "splitting"):
+        for h in steps_fs:
+            run = common.nve_run(model.system, x0, v0, method, h * common.FS, total_ps, 0.032, "Reference", bodies)
+            state = run["context"].getState(getPositions=True, getVelocities=True)
+            L0 = _angular_momentum(_initial_state(model.system, x0, v0), model.system)
+            L = _angular_momentum(state, model.system)
+            e = run["total"]
+            rows.append({
+                "system": "isolated benzene", "method": method, "step_fs": h,
+                "energy_rel_error": float(np.max(np.abs(e - e[0])) / abs(e[0])),
+                "angmom_rel_error": float(np.linalg.norm(L - L0) / np.linalg.norm(L0)),
+                "position_error_nm": float(np.max(np.linalg.norm(
+                    state.getPositions(asNumpy=True).value_in_unit(unit.nanometer) - ref_positions, axis=1))),
+                "rigidity_nm": float(run["rigidity"].max()),
+            })
+            log("  isolated benzene %-9s h=%4.1f fs  |dE|/E=%.2e  |dL|/L=%.2e  x err=%.2e nm" % (
+                method, h, rows[-1]["energy_rel_error"], rows[-1]["angmom_rel_error"], rows[-1]["position_error_nm"]))
+    return rows
+
+
+def _initial_state(system, x, v):
+    context = openmm.Context(system, openmm.VerletIntegrator(0.001), openmm.Platform.getPlatformByName("Reference"))
+    context.setPositions(x)
+    context.setVelocities(v)
+    return context.getState(getPositions=True, getVelocities=True)
+
+
+def energy_vs_step(label, system, positions, velocities, bodies, methods, steps_fs, total_ps, log, platform="CPU"):
+    """Total-energy fluctuation (std) and drift per step size and method, one NVE run each."""
+    rows = []
+    for method in methods:
+        for h in steps_fs:
+            run = common.nve_run(system, positions, velocities, method, h * common.FS, total_ps, 0.008,
+                                 platform, bodies)
+            e = run["total"]
+            ok = run["failure"] is None and len(e) > 2
+            rows.append({
+                "system": label, "method": method, "step_fs": h,
+                "fluctuation": float(np.std(e)) if ok else float("nan"),
+                "drift_per_ns": stats.drift_per_ns(run["time"], e) if ok else float("nan"),
+                "rigidity_nm": float(run["rigidity"].max()) if run["rigidity"].size else float("nan"),
+                "failure": run["failure"] or "",
+                "dof": run["dof"],
+            })
+            log("  %-22s %-26s h=%4.1f fs  std(E)=%.3e  drift=%+.3e kJ/mol/ns  rigid=%.1e  %s" % (
+                label, method, h, rows[-1]["fluctuation"], rows[-1]["drift_per_ns"], rows[-1]["rigidity_nm"],
+                rows[-1]["failure"]))
+    return rows
+
+
+def orders(rows):
+    """Fitted order of the energy fluctuation per (system, method) over the finite points."""
+    out = []
+    keys = sorted({(r["system"], r["method"]) for r in rows if "fluctuation" in r})
+    for system, method in keys:
+        pts = [(r["step_fs"], r["fluctuation"]) for r in rows
+               if r["system"] == system and r["method"] == method and math.isfinite(r["fluctuation"])
+               and r["fluctuation"] > 0]
+        # Fit where the error is asymptotic: the three smallest steps that ran.
+        pts = sorted(pts)[:3]
+        if len(pts) >= 2:
+            out.append({"system": system, "method": method,
+                        "order": stats.fitted_order([p[0] for p in pts], [p[1] for p in pts])})
+    return out
+
+
+def planar_benzene_with_constraints(total_ps, log):
+    """What OpenMM's constraint algorithms do with benzene held by distance constraints.
+
+    Two constraint sets per molecule: the 30 bond and angle distances (3N-6, enough for a
+    non-planar molecule, but planar benzene can flex out of plane without changing any of
+    them) and all 66 pair distances (redundant). Compared with M-RATTLE on the same start.
+    """
+    model = mrattle.models.benzeneCluster(temperature=250 * unit.kelvin, seed=2)
+    x0 = _positions(model)
+    v0 = np.array(model.velocities.value_in_unit(unit.nanometer / unit.picosecond))
+    bodies = _bodies(model)
+    sites = mrattle.models.benzeneSites()
+    bonded = [(k, (k + 1) % 6) for k in range(6)] + [(k, k + 6) for k in range(6)]
+    angles = [(k, (k + 2) % 6) for k in range(6)] + [((k + 1) % 6, k + 6) for k in range(6)] + \
+             [((k - 1) % 6, k + 6) for k in range(6)]
+    all_pairs = [(i, j) for i in range(12) for j in range(i + 1, 12)]
+    rows = []
+    for name, pairs in (("30 bond+angle distances", bonded + angles), ("all 66 pair distances", all_pairs)):
+        system = _copy(model.system)
+        for body in bodies:
+            for i, j in pairs:
+                system.addConstraint(body[i], body[j], float(np.linalg.norm(sites[i] - sites[j])))
+        for method in ("Verlet + CCMA", "RATTLE (CustomIntegrator)", "M-RATTLE"):
+            run = common.nve_run(system, x0, v0, method, 1.0 * common.FS, total_ps, 0.01, "Reference", bodies,
+                                 tolerance=1e-8)
+            e = run["total"]
+            rows.append({
+                "constraints": name, "method": method, "steps_run": run["steps"],
+                "rigidity_nm": float(run["rigidity"].max()) if run["rigidity"].size else float("nan"),
+                "energy_change": float(e[-1] - e[0]) if len(e) > 1 else float("nan"),
+                "wall_s": run["wall"], "failure": run["failure"] or "",
+            })
+            log("  planar benzene, %-24s %-26s steps=%d rigid=%.2e dE=%.3e %s" % (
+                name, method, rows[-1]["steps_run"], rows[-1]["rigidity_nm"], rows[-1]["energy_change"],
+                rows[-1]["failure"]))
+    return rows
+
+
+def plot(rows, path, title):
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    systems = sorted({r["system"] for r in rows})
+    fig, axes = plt.subplots(1, len(systems), figsize=(5.2 * len(systems), 4.2), squeeze=False)
+    for ax, system in zip(axes[0], systems):
+        for method in sorted({r["method"] for r in rows if r["system"] == system}):
+            pts = sorted((r["step_fs"], r["fluctuation"]) for r in rows
+                         if r["system"] == system and r["method"] == method and math.isfinite(r["fluctuation"]))
+            if pts:
+                ax.loglog([p[0] for p in pts], [p[1] for p in pts], "o-", label=method)
+        hs = np.array(sorted({r["step_fs"] for r in rows}))
+        finite = [r["fluctuation"] for r in rows if r["system"] == system and math.isfinite(r["fluctuation"])]
+        if finite:
+            anchor = min(finite)
+            ax.loglog(hs, anchor * (hs / hs[0]) ** 2, "k:", label="slope 2")
+        ax.set_xlabel("step size (fs)")
+        ax.set_ylabel("std of total energy (kJ/mol)")
+        ax.set_title(system)
+        ax.legend(fontsize=8)
+    fig.suptitle(title)
+    fig.tight_layout()
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
+
+
+def plot_isolated(rows, path):
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    fig, axes = plt.subplots(1, 2, figsize=(10, 4))
+    for method in ("M-RATTLE", "splitting"):
+        pts = sorted((r["step_fs"], r["energy_rel_error"], r["position_error_nm"]) for r in rows if r["method"] == method)
+        axes[0].loglog([p[0] for p in pts], [max(p[1], 1e-17) for p in pts], "o-", label=method)
+        axes[1].loglog([p[0] for p in pts], [p[2] for p in pts], "o-", label=method)
+    axes[0].set_ylabel("max |E - E0| / E0")
+    axes[1].set_ylabel("max atom position error at end (nm)")
+    for ax in axes:
+        ax.set_xlabel("step size (fs)")
+        ax.legend()
+    fig.suptitle("Isolated rigid benzene (free rotor)")
+    fig.tight_layout()
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
+
+
+def ccma_subsets(log):
+    """OpenMM's CCMA on one 5-site molecule held by 9 of its 10 pair distances (and all 10).
+
+    Random (non-rigid) velocities are projected with Context.applyVelocityConstraints on
+    the Reference platform; the exact projection (M-RATTLE's) keeps the rigid part, so the
+    kinetic energies must agree.
+    """
+    sites, masses = common.tetrahedral_sites()
+    pairs = [(i, j) for i in range(5) for j in range(i + 1, 5)]
+    velocities = np.random.default_rng(0).normal(size=(5, 3))
+    exact = _projected_kinetic_energy(sites, masses, velocities, [], "M-RATTLE")
+    rows = []
+    for omitted in pairs + [None]:
+        kept = [p for p in pairs if p != omitted]
+        ke = _projected_kinetic_energy(sites, masses, velocities, kept, "CCMA")
+        rows.append({"omitted pair": "%d-%d" % omitted if omitted else "none (all 10)",
+                     "CCMA kinetic energy": ke, "exact": exact,
+                     "converged": bool(np.isfinite(ke) and abs(ke - exact) < 1e-6 * exact)})
+        log("  CCMA, omitted %-14s KE %.6g (exact %.6g)" % (rows[-1]["omitted pair"], ke, exact))
+    return rows
+
+
+def _projected_kinetic_energy(sites, masses, velocities, pairs, how):
+    system = openmm.System()
+    for m in masses:
+        system.addParticle(m)
+    for i, j in pairs:
+        system.addConstraint(i, j, float(np.linalg.norm(sites[i] - sites[j])))
+    if how == "M-RATTLE":
+        integrator = mrattle.MRattleIntegrator(0.001)
+        integrator.addRigidBody(list(range(len(masses))))
+    else:
+        integrator = openmm.VerletIntegrator(0.001)
+    context = openmm.Context(system, integrator, openmm.Platform.getPlatformByName("Reference"))
+    context.setPositions(sites)
+    context.setVelocities(velocities)
+    if how != "M-RATTLE":
+        try:
+            context.applyVelocityConstraints(1e-8)
+        except Exception:
+            return float("nan")
+    v = context.getState(getVelocities=True).getVelocities(asNumpy=True).value_in_unit(unit.nanometer / unit.picosecond)
+    return float(0.5 * (masses[:, None] * v ** 2).sum())
