@@ -9,8 +9,9 @@ import pytest
 EXAMPLES = os.path.join(os.path.dirname(os.path.abspath(__file__)), '..', '..', 'examples')
 
 
-def runExample(name, tmp_path, *arguments):
-    command = [sys.executable, os.path.join(EXAMPLES, name), '--output', str(tmp_path/'out')] + list(arguments)
+def runExample(name, tmp_path, *arguments, output=True):
+    command = [sys.executable, os.path.join(EXAMPLES, name)] + (['--output', str(tmp_path/'out')] if output else [])
+    command += list(arguments)
     result = subprocess.run(command, cwd=str(tmp_path), stdout=subprocess.PIPE, stderr=subprocess.PIPE,
                             universal_newlines=True, timeout=300, env=dict(os.environ, OMP_NUM_THREADS='1'))
     assert result.returncode == 0, result.stderr
@@ -51,3 +52,11 @@ def test_liquid_benzene(tmp_path):
     out = tmp_path/'out'
     for name in ('liquid_benzene.pdb', 'liquid_benzene.dcd', 'liquid_benzene.csv'):
         assert os.path.getsize(str(out/name)) > 0
+
+
+def test_intra_body_speedup(tmp_path):
+    result = runExample('intra_body_speedup.py', tmp_path, '--steps', '2', '--repeats', '1', '--liquid-molecules',
+                        '27', '--liquid-cutoff', '0.7', output=False)
+    rows = [line for line in result.stdout.splitlines() if line.endswith('x')]
+    assert len(rows) == 4
+    assert all(float(row.split()[-1].rstrip('x')) > 0 for row in rows)
