@@ -13,7 +13,7 @@ def runExample(name, tmp_path, *arguments, output=True):
     command = [sys.executable, os.path.join(EXAMPLES, name)] + (['--output', str(tmp_path/'out')] if output else [])
     command += list(arguments)
     result = subprocess.run(command, cwd=str(tmp_path), stdout=subprocess.PIPE, stderr=subprocess.PIPE,
-                            universal_newlines=True, timeout=300, env=dict(os.environ, OMP_NUM_THREADS='1'))
+                            universal_newlines=True, timeout=300, env=dict(os.environ, OPENMM_CPU_THREADS='1'))
     assert result.returncode == 0, result.stderr
     return result
 
