@@ -20,7 +20,7 @@
  *                  [--batch-seconds 0.05] [--threads 1]
  *                  [--integrators verlet,mrattle,splitting,mrattle_allpairs,verlet_ccma]
  * Timings go to --out (default stdout) as CSV; the speed-target ratios to --ratios
- * (default stderr) as CSV.
+ * (default stderr) as CSV. Exit status 2 if any run diverged (non-finite state).
  */
 #include "BenchmarkShapes.h"
 #include "MRattleIntegrator.h"
@@ -225,6 +225,7 @@ double median(vector<double> values) {
 int main(int argc, char** argv) {
     try {
         Options options = parse(argc, argv);
+        bool allFinite = true;
         Platform::loadPluginsFromDirectory(Platform::getDefaultPluginsDirectory());
         registerMRattleReferenceKernelFactories();
         std::ofstream outFile, ratioFile;
@@ -308,6 +309,7 @@ int main(int argc, char** argv) {
                         bool finite = std::isfinite(state.getKineticEnergy());
                         for (const Vec3& x : state.getPositions())
                             finite = finite && std::isfinite(x[0] + x[1] + x[2]);
+                        allFinite = allFinite && finite;
                         out << platformName << ',' << run.name << ',' << k << ',' << numBodies << ',' << numAtoms << ','
                             << run.constraintsPerBody << ',' << steps[i] << ',' << options.repeats << ',' << m * 1e6
                             << ',' << *range.first * 1e6 << ',' << *range.second * 1e6 << ','
@@ -331,6 +333,10 @@ int main(int argc, char** argv) {
                     ratios.flush();
                 }
             }
+        }
+        if (!allFinite) {
+            std::cerr << "step_cost: some run diverged (finite = no in the CSV)" << std::endl;
+            return 2;
         }
     } catch (const std::exception& e) {
         std::cerr << "step_cost: " << e.what() << std::endl;
