@@ -69,7 +69,7 @@ def main():
         v = np.array(cluster.velocities.value_in_unit(unit.nanometer / unit.picosecond))
         bodies = accuracy._bodies(cluster)
         rows = accuracy.energy_vs_step("27-benzene cluster", cluster.system, x, v, bodies, ["M-RATTLE", "splitting"],
-                                       steps if not q else [1, 2], 20.0 if not q else 0.1, log)
+                                       steps if not q else [1, 2], 4.096 if not q else 0.1, log)
         log("accuracy: non-planar 5-site cluster (OpenMM's RATTLE and CCMA too)")
         tsys, tx, tbodies = common.tetrahedral_cluster(constraints=9)
         tv = common.rigid_velocities(tsys, tx, tbodies, 200.0, seed=5)
@@ -82,7 +82,7 @@ def main():
         accuracy.plot(rows, os.path.join(results_dir, "accuracy_energy_vs_step.png"), "Energy fluctuation against step size")
         order_rows = accuracy.orders(rows)
         log("accuracy: planar benzene under OpenMM's distance constraints")
-        planar = accuracy.planar_benzene_with_constraints(2.0 if not q else 0.05, log)
+        planar = accuracy.planar_benzene_with_constraints(0.5 if not q else 0.05, log)
         write_csv(os.path.join(results_dir, "accuracy_planar_constraints.csv"), planar)
         log("accuracy: which 9-constraint sets OpenMM's CCMA converges on")
         ccma = accuracy.ccma_subsets(log)
@@ -102,9 +102,9 @@ def main():
 
     if "sampling" in parts:
         log("sampling: long NVE runs")
-        total = 400.0 if not q else 1.0
+        total = 60.0 if not q else 1.0
         res = {m: sampling.run(m, total, 2.0, 200.0, 11, log) for m in ("M-RATTLE", "splitting")}
-        eq = 20.0 if not q else 0.2
+        eq = 10.0 if not q else 0.2
         srows = sampling.compare(res, eq)
         write_csv(os.path.join(results_dir, "sampling_comparison.csv"), srows)
         sampling.plot(res, eq, os.path.join(results_dir, "sampling_histograms.png"))

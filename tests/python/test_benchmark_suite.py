@@ -1,0 +1,54 @@
+"""The benchmark suite's --quick mode: it runs end to end and its numbers make sense."""
+import csv
+import os
+import subprocess
+import sys
+
+import mrattle
+
+ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
+# The build tree's package lives in <build>/python/mrattle.
+BUILD = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(mrattle.__file__))))
+
+
+def read(path):
+    with open(path) as f:
+        return list(csv.DictReader(f))
+
+
+def test_quick_suite_writes_every_section(tmp_path):
+    subprocess.run([sys.executable, os.path.join(ROOT, "benchmarks", "run_suite.py"), "--quick", "--build", BUILD,
+                    "--out", str(tmp_path)], check=True, timeout=600)
+    text = (tmp_path / "results.md").read_text()
+    for heading in ("## Accuracy", "## Cost per step", "## Sampling", "## What a user gains"):
+        assert heading in text
+    results = tmp_path / "results"
+    for png in ("accuracy_isolated_benzene.png", "accuracy_energy_vs_step.png", "cost_step_times.png",
+                "sampling_histograms.png"):
+        assert (results / png).stat().st_size > 1000
+
+    # M-RATTLE is RATTLE: on the non-planar cluster the energy fluctuations agree.
+    rows = read(results / "accuracy_energy_vs_step.csv")
+    for h in ("1", "2"):
+        m = [r for r in rows if r["system"].startswith("27 tetrahedral") and r["method"] == "M-RATTLE"
+             and float(r["step_fs"]) == float(h)][0]
+        r = [r for r in rows if r["system"].startswith("27 tetrahedral") and r["method"].startswith("RATTLE")
+             and float(r["step_fs"]) == float(h)][0]
+        assert abs(float(m["fluctuation"]) - float(r["fluctuation"])) < 1e-3 * float(r["fluctuation"])
+        assert float(m["rigidity_nm"]) < 1e-10
+
+    # The free benzene conserves energy and angular momentum to round-off under M-RATTLE.
+    for r in read(results / "accuracy_isolated_benzene.csv"):
+        if r["method"] == "M-RATTLE":
+            assert float(r["energy_rel_error"]) < 1e-11
+            assert float(r["angmom_rel_error"]) < 1e-11
+
+    # The constraint set the non-planar runs use is one CCMA converges on.
+    ccma = {r["omitted pair"]: r for r in read(results / "accuracy_ccma_subsets.csv")}
+    assert ccma["0-1"]["converged"] == "True"
+
+    # Planar benzene: M-RATTLE keeps every distance.
+    for r in read(results / "accuracy_planar_constraints.csv"):
+        if r["method"] == "M-RATTLE":
+            assert r["failure"] == ""
+            assert float(r["rigidity_nm"]) < 1e-10
