@@ -120,8 +120,9 @@ def benzeneLiquid(numMolecules=64, density=0.8765*unit.grams/unit.milliliters, c
     """A periodic box of liquid benzene with PME electrostatics and cut-off LJ with long-range correction.
 
     Molecules start on a cubic lattice (the box holds the next cube number of sites, the
-    first ``numMolecules`` are filled) with random orientations chosen to avoid overlaps.
-    Equilibrate before measuring anything.
+    first ``numMolecules`` are filled) with orientations chosen to avoid overlaps; the
+    start is still far from equilibrium (it heats up at first): equilibrate before
+    measuring anything.
 
     Parameters
     ----------
@@ -319,31 +320,38 @@ def _randomRotation(random):
                      [2*(x*z - y*w), 2*(y*z + x*w), 1 - 2*(x*x + y*y)]])
 
 
-def _placeRigidMolecules(sites, centres, random, box, attempts=50):
-    """Copies of a molecule at the given centres; each orientation is the best of several random
-    ones, the one keeping the closest atom of another molecule farthest away."""
-    placed = []
-    for centre in centres:
-        best, bestDistance = None, -1.0
-        for attempt in range(attempts):
-            candidate = centre + sites.dot(_randomRotation(random).T)
-            distance = _closestDistance(candidate, placed, box)
-            if distance > bestDistance:
-                best, bestDistance = candidate, distance
-            if distance > 0.3:
-                break
-        placed.append(best)
-    return np.array(placed)
+def _placeRigidMolecules(sites, centres, random, box, attempts=60, sweeps=4):
+    """Copies of a molecule at the given centres with orientations that avoid overlaps.
+
+    Each molecule starts at a random orientation; then, sweep after sweep, each one takes
+    whichever of its current and several new random orientations overlaps its neighbours
+    least, scored by a soft repulsion sum((0.25 nm/r)^12) over atoms closer than 0.35 nm.
+    """
+    count = len(centres)
+    molecules = np.array([centre + sites.dot(_randomRotation(random).T) for centre in centres])
+    reach = 2*np.linalg.norm(sites, axis=1).max() + 0.35
+    for sweep in range(sweeps):
+        for k in range(count):
+            offsets = centres - centres[k]
+            if box is not None:
+                offsets -= box*np.round(offsets/box)
+            neighbours = np.where((np.linalg.norm(offsets, axis=1) < reach) & (np.arange(count) != k))[0]
+            if len(neighbours) == 0:
+                continue
+            candidates = np.array([molecules[k]] + [centres[k] + sites.dot(_randomRotation(random).T)
+                                                    for attempt in range(attempts)])
+            molecules[k] = candidates[_overlapScores(candidates, molecules[neighbours].reshape(-1, 3), box).argmin()]
+    return molecules
 
 
-def _closestDistance(candidate, placed, box):
-    if not placed:
-        return math.inf
-    others = np.concatenate(placed)
-    delta = candidate[:, np.newaxis, :] - others[np.newaxis, :, :]
+def _overlapScores(candidates, others, box):
+    """Soft repulsion of each candidate placement (candidates x sites x 3) with the other atoms."""
+    delta = candidates[:, :, np.newaxis, :] - others[np.newaxis, np.newaxis, :, :]
     if box is not None:
         delta -= box*np.round(delta/box)
-    return math.sqrt((delta**2).sum(axis=2).min())
+    squared = (delta**2).sum(axis=3)
+    repulsion = np.where(squared < 0.35**2, (0.25**2/np.maximum(squared, 1e-6))**6, 0.0)
+    return repulsion.sum(axis=(1, 2))
 
 
 def _rigidVelocities(coordinates, masses, temperature, random):
