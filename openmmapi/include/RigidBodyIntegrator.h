@@ -105,6 +105,8 @@ private:
 
     /** Recompute forces after making the platform rebuild what it caches from earlier positions. */
     void refreshForceCaches();
+    /** After a thermostat collision hit part of a body, give the whole body fresh thermal velocities. */
+    void thermalizeCollidedBodies();
     /** A checkpoint of the whole Context at the last point it was known to be consistent. */
     void saveRollbackState();
     /** Load the rollback checkpoint; true on success. */

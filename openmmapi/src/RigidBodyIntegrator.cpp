@@ -419,12 +419,59 @@ void RigidBodyIntegrator::beginStep() {
                               std::to_string(getStepSize()));
     if (context->updateContextState())
         forcesAreValid = false;
-    if (hasVelocityChangingForce)
+    if (hasVelocityChangingForce) {
+        thermalizeCollidedBodies();
         kernel.getAs<RigidBodyKernel>().projectContextVelocities(*context, getConstraintTolerance());
+    }
     if (refreshCachesBeforeStep) {
         refreshCachesBeforeStep = false;
         refreshForceCaches();
     }
+}
+
+void RigidBodyIntegrator::thermalizeCollidedBodies() {
+    // AndersenThermostat randomizes single particles (or groups held by constraints).
+    // Projecting a body of which only some atoms are fresh onto rigid motion does not keep
+    // the rigid-body Boltzmann distribution (bonded water settles ~10% cold), while
+    // projecting fresh Maxwell-Boltzmann velocities of all its atoms does. So a body with a
+    // collided atom -- its velocities are no longer rigid -- collides as a whole. The
+    // random numbers are seeded from the velocities the thermostat drew, so a run is
+    // reproducible from a checkpoint.
+    vector<Vec3> positions, velocities;
+    context->getPositions(positions);
+    context->getVelocities(velocities);
+    vector<Vec3> rigid = velocities;
+    double* rigidData = reinterpret_cast<double*>(rigid.data());
+    const double* positionData = reinterpret_cast<const double*>(positions.data());
+    const double temperature = context->getParameter(AndersenThermostat::Temperature());
+    bool changed = false;
+    for (int b = 0; b < bodySet.getNumBodies(); b++) {
+        RigidBodyMath::projectBodyVelocities(bodySet.view(b), positionData, rigidData);
+        double scale = 0, residual = 0;
+        for (int i : bodySet.getBodyParticles(b)) {
+            scale = std::max(scale, std::sqrt(velocities[i].dot(velocities[i])));
+            Vec3 d = velocities[i] - rigid[i];
+            residual = std::max(residual, std::sqrt(d.dot(d)));
+        }
+        if (!(residual > 1e-8 * scale))
+            continue;  // still rigid: no collision
+        uint64_t seed = 14695981039346656037ULL ^ (uint64_t) b;
+        for (int i : bodySet.getBodyParticles(b)) {
+            const unsigned char* bytes = reinterpret_cast<const unsigned char*>(&velocities[i]);
+            for (size_t k = 0; k < sizeof(Vec3); k++)
+                seed = (seed ^ bytes[k]) * 1099511628211ULL;
+        }
+        std::mt19937_64 generator(seed);
+        std::normal_distribution<double> gaussian(0.0, 1.0);
+        for (int i : bodySet.getBodyParticles(b)) {
+            double sigma = std::sqrt(BOLTZ * temperature / bodySet.getMasses()[i]);
+            double x = gaussian(generator), y = gaussian(generator), z = gaussian(generator);
+            velocities[i] = Vec3(x, y, z) * sigma;
+        }
+        changed = true;
+    }
+    if (changed)
+        context->setVelocities(velocities);
 }
 
 void RigidBodyIntegrator::ensureForces() {
