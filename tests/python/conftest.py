@@ -15,6 +15,12 @@ def pytest_sessionstart(session):
         raise pytest.UsageError('imported mrattle from %s, expected %s' % (mrattle.__file__, expected))
 
 
+def pytest_collection_finish(session):
+    # An empty collection (pytest's exit code 5) must never pass for a green suite.
+    if not session.items:
+        raise pytest.UsageError('no Python tests were collected from %s' % os.path.dirname(__file__))
+
+
 @pytest.fixture(params=['Reference', 'CPU'])
 def platform(request):
     """Each platform the plugin's kernels run on."""
