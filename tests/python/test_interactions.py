@@ -107,3 +107,33 @@ def test_terms_crossing_bodies_are_kept():
     assert kept['HarmonicBondForce'].getBondParameters(0)[:2] == [1, 2]
     assert kept['CustomTorsionForce'].getNumTorsions() == 1
     assert sorted(tuple(kept['CustomNonbondedForce'].getExclusionParticles(i)) for i in range(2)) == [(0, 1), (2, 3)]
+
+
+def test_virtual_sites_count_as_part_of_their_body():
+    """TIP4P-Ew from OpenMM's own PDB and force field: the M site of each water is built
+    from its O and Hs, so its pairs with them are intra-body (already excluded here)."""
+    import os
+    from openmm import app
+    pdb = app.PDBFile(os.path.join(os.path.dirname(app.__file__), 'data', 'tip4pew.pdb'))
+    system = app.ForceField('tip4pew.xml').createSystem(pdb.topology, nonbondedMethod=app.PME,
+                                                        nonbondedCutoff=0.9*unit.nanometers, rigidWater=True)
+    assert sum(system.isVirtualSite(i) for i in range(system.getNumParticles())) == 895
+    stripped = mrattle.removeIntraBodyInteractions(system, pdb.positions)
+    nonbonded = forcesByType(stripped)['NonbondedForce']
+    assert nonbonded.getNumExceptions() == 895*6  # O-H, O-H, H-H, and M with each: nothing new
+    assert stripped.getNumConstraints() == system.getNumConstraints()
+    # A body plus a virtual site built from two bodies: that site belongs to neither.
+    system2 = openmm.System()
+    for i in range(5):
+        system2.addParticle(1.0 if i < 4 else 0.0)
+    system2.setVirtualSite(4, openmm.TwoParticleAverageSite(1, 2, 0.5, 0.5))
+    custom = openmm.CustomNonbondedForce('r')
+    for i in range(5):
+        custom.addParticle([])
+    system2.addForce(custom)
+    positions = [openmm.Vec3(0.1*i, 0, 0) for i in range(5)]
+    stripped2 = mrattle.removeIntraBodyInteractions(system2, positions, [[0, 1], [2, 3]])
+    result = forcesByType(stripped2)  # (the System must outlive its forces' proxies)
+    pairs = sorted(tuple(result['CustomNonbondedForce'].getExclusionParticles(i))
+                   for i in range(result['CustomNonbondedForce'].getNumExclusions()))
+    assert pairs == [(0, 1), (2, 3)]
