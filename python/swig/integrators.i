@@ -4,7 +4,8 @@
  * The classes derive from OpenMM's Python class openmm.Integrator: SWIG's shared runtime
  * type table (do not define SWIG_TYPE_TABLE) lets openmm.Context accept them, and the
  * inherited getStepSize()/setStepSize() handle units as for OpenMM's integrators.
- * To wrap another RigidBodyIntegrator subclass, add it at the end with MRATTLE_INTEGRATOR.
+ * To wrap another RigidBodyIntegrator subclass: include its header below, add a
+ * MRATTLE_INTEGRATOR line and a dynamic_cast line in _pluginIntegratorProxy.
  */
 %module(package="mrattle", docstring="SWIG wrappers of the M-RATTLE plugin's integrators.") integrators
 
