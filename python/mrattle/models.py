@@ -105,6 +105,10 @@ def benzeneCluster(temperature=300*unit.kelvin, spacing=0.65*unit.nanometers, se
     """
     temperature = _inUnit(temperature, unit.kelvin)
     spacing = _inUnit(spacing, unit.nanometers)
+    if not temperature >= 0:
+        raise ValueError('benzeneCluster: the temperature must be >= 0 K, got %g' % temperature)
+    if not spacing > 0:
+        raise ValueError('benzeneCluster: the spacing must be > 0 nm, got %g' % spacing)
     random = np.random.default_rng(seed)
     centres = np.array([(i, j, k) for i in range(3) for j in range(3) for k in range(3)], float)*spacing
     centres -= centres.mean(axis=0)
@@ -384,5 +388,5 @@ def _rigidVelocities(coordinates, masses, temperature, random):
     v -= np.cross(np.linalg.solve(inertia, angularMomentum), arms)
     kinetic = 0.5*allMasses.dot((v**2).sum(axis=1))
     dof = 6*len(coordinates)
-    v *= math.sqrt(0.5*dof*kT/kinetic)
+    v *= math.sqrt(0.5*dof*kT/kinetic) if kinetic > 0 else 0.0
     return [openmm.Vec3(*row) for row in v]

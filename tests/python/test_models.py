@@ -59,6 +59,15 @@ def test_cluster_momenta_and_rigid_velocities():
     assert closest > 0.2
 
 
+def test_cluster_at_zero_kelvin_and_bad_arguments():
+    model = models.benzeneCluster(temperature=0)
+    assert np.abs(np.array(model.velocities.value_in_unit(unit.nanometers/unit.picoseconds))).max() == 0
+    with pytest.raises(ValueError, match='temperature'):
+        models.benzeneCluster(temperature=-1*unit.kelvin)
+    with pytest.raises(ValueError, match='spacing'):
+        models.benzeneCluster(spacing=0)
+
+
 def test_liquid_and_water_boxes():
     liquid = models.benzeneLiquid(numMolecules=30, cutoff=0.8*unit.nanometers)
     assert liquid.system.getNumParticles() == 360 and liquid.system.usesPeriodicBoundaryConditions()
