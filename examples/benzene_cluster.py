@@ -119,7 +119,6 @@ def main():
         system = mrattle.removeIntraBodyInteractions(system, model.positions)
 
     integrator = mrattle.MRattleIntegrator(arguments.step_size*unit.femtoseconds)
-    integrator.setConstraintTolerance(1e-10)
     platform = openmm.Platform.getPlatformByName(arguments.platform)
     properties = {'Threads': str(arguments.threads)} if arguments.platform == 'CPU' and arguments.threads > 0 else {}
     simulation = app.Simulation(model.topology, system, integrator, platform, properties)
