@@ -32,6 +32,8 @@ def parseArguments():
     parser.add_argument('--report-interval', type=int, default=50, help='steps between reports (default 50)')
     parser.add_argument('--seed', type=int, default=1, help='random seed of orientations and velocities')
     parser.add_argument('--output', default='output', help='output folder (default ./output)')
+    parser.add_argument('--integrator', default='mrattle', choices=['mrattle', 'splitting'],
+                        help='M-RATTLE (default) or the symplectic-splitting baseline, for comparison')
     parser.add_argument('--keep-intra-body', action='store_true',
                         help='keep the interactions inside molecules (they cannot affect the motion)')
     arguments = parser.parse_args()
@@ -87,7 +89,7 @@ class RigidityMonitor(object):
         self.largestError = max(self.largestError, np.abs(self._distances(positions) - self.reference).max())
 
 
-def plotEnergies(csvPath, pngPath):
+def plotEnergies(csvPath, pngPath, method):
     import matplotlib
     matplotlib.use('Agg')
     import matplotlib.pyplot as plt
@@ -99,7 +101,7 @@ def plotEnergies(csvPath, pngPath):
     top.plot(time_ps, data['Total_Energy_kJmole'], label='total')
     top.set_ylabel('energy (kJ/mol)')
     top.legend(loc='center right')
-    top.set_title('27 rigid benzene molecules, NVE, M-RATTLE')
+    top.set_title('27 rigid benzene molecules, NVE, %s' % method)
     total = data['Total_Energy_kJmole']
     bottom.plot(time_ps, total - total[0], color='C2')
     bottom.set_ylabel('total energy - initial (kJ/mol)')
@@ -118,7 +120,8 @@ def main():
     if not arguments.keep_intra_body:
         system = mrattle.removeIntraBodyInteractions(system, model.positions)
 
-    integrator = mrattle.MRattleIntegrator(arguments.step_size*unit.femtoseconds)
+    integratorClass = mrattle.MRattleIntegrator if arguments.integrator == 'mrattle' else mrattle.RigidSplittingIntegrator
+    integrator = integratorClass(arguments.step_size*unit.femtoseconds)
     platform = openmm.Platform.getPlatformByName(arguments.platform)
     properties = {'Threads': str(arguments.threads)} if arguments.platform == 'CPU' and arguments.threads > 0 else {}
     simulation = app.Simulation(model.topology, system, integrator, platform, properties)
@@ -143,7 +146,8 @@ def main():
     simulation.step(arguments.steps)
     wallTime = time.time() - start
 
-    data = plotEnergies(csvPath, os.path.join(arguments.output, 'energies.png'))
+    method = 'M-RATTLE' if arguments.integrator == 'mrattle' else 'rigid-body splitting'
+    data = plotEnergies(csvPath, os.path.join(arguments.output, 'energies.png'), method)
     total = np.atleast_1d(data['Total_Energy_kJmole'])
     kinetic = np.atleast_1d(data['Kinetic_Energy_kJmole'])
     times = np.atleast_1d(data['Time_ps'])
@@ -163,7 +167,8 @@ def main():
         ('files', ', '.join(sorted(os.listdir(arguments.output)))),
     ]
     width = max(len(name) for name, value in rows)
-    print('\nM-RATTLE NVE run of a 27-benzene cluster')
+    print('\n%s NVE run of a 27-benzene cluster' % ('M-RATTLE' if arguments.integrator == 'mrattle'
+                                                   else 'Symplectic-splitting'))
     print('-'*(width + 50))
     for name, value in rows:
         print('%-*s  %s' % (width, name, value))

@@ -18,9 +18,10 @@ def runExample(name, tmp_path, *arguments, output=True):
     return result
 
 
-def test_benzene_cluster(tmp_path):
+@pytest.mark.parametrize('integrator', ['mrattle', 'splitting'])
+def test_benzene_cluster(tmp_path, integrator):
     result = runExample('benzene_cluster.py', tmp_path, '--steps', '40', '--report-interval', '10',
-                        '--platform', 'Reference')
+                        '--platform', 'Reference', '--integrator', integrator)
     out = tmp_path/'out'
     assert sorted(os.listdir(str(out))) == ['cluster.pdb', 'energies.csv', 'energies.png', 'trajectory.dcd']
     with open(str(out/'energies.csv')) as stream:
