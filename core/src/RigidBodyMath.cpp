@@ -44,22 +44,15 @@ Vector3d linearAxis(const BodyView& body, const double* positions, const Vector3
     return length > 0 ? Vector3d(farthest / length) : Vector3d(1, 0, 0);
 }
 
-/** The smallest rotation taking unit vector u onto unit vector p (u != -p). */
-Matrix3d rotationBetween(const Vector3d& u, const Vector3d& p) {
-    Vector3d k = u.cross(p);
-    double c = u.dot(p);
-    Matrix3d K = crossMatrix(k);
-    return Matrix3d::Identity() + K + K * K / (1.0 + c);
-}
-
 /**
  * Linear body: the condition u x (j p - w) = 0 (u the old axis, p = P u the new one,
  * w = sum m_i s_i y_i, j = sum m_i s_i^2) has the closed form p = (w + lambda u) / j
  * with |p| = 1; spin about the axis is no degree of freedom, so P is the smallest
- * rotation taking u to p.
+ * rotation taking u to p. displacement(atom) is y_i - a_i (positions about the centres).
  */
-RotationSolve solveLinearRotation(const BodyView& body, const double* oldPositions, const double* newPositions,
-                                  const Vector3d& oldCenter, const Vector3d& newCenter) {
+template <class Displacement>
+RotationSolve solveLinearRotation(const BodyView& body, const double* oldPositions, const Vector3d& oldCenter,
+                                  Displacement displacement) {
     RotationSolve result;
     Vector3d u = linearAxis(body, oldPositions, oldCenter);
     Vector3d w = Vector3d::Zero();
@@ -67,8 +60,9 @@ RotationSolve solveLinearRotation(const BodyView& body, const double* oldPositio
     for (int k = 0; k < body.numAtoms; k++) {
         int atom = body.atoms[k];
         double m = body.masses[atom];
-        double s = (point(oldPositions, atom) - oldCenter).dot(u);
-        w += (m * s) * (point(newPositions, atom) - newCenter);
+        Vector3d a = point(oldPositions, atom) - oldCenter;
+        double s = a.dot(u);
+        w += (m * s) * (a + displacement(atom));
         j += m * s * s;
     }
     result.iterations = 1;
@@ -82,9 +76,13 @@ RotationSolve solveLinearRotation(const BodyView& body, const double* oldPositio
         return result;  // no rotation satisfies the condition: step far too large
     Vector3d p = (w + (-uw + std::sqrt(discriminant)) * u) / j;
     p.normalize();
-    if (u.dot(p) <= -1.0 + 1e-12)
+    double c = u.dot(p);
+    if (c <= -1.0 + 1e-12)
         return result;
-    result.rotation = rotationBetween(u, p);
+    // The smallest rotation taking u to p, less the identity: K + K^2/(1+c), K = [u x p].
+    Matrix3d K = crossMatrix(u.cross(p));
+    result.rotationMinusIdentity = K + K * K / (1.0 + c);
+    result.rotation = Matrix3d::Identity() + result.rotationMinusIdentity;
     result.converged = true;
     return result;
 }
@@ -176,32 +174,67 @@ RotationSolve solveResetRotationForTorque(const Matrix3d& J, const Vector3d& tar
     return result;
 }
 
+namespace {
+
+/**
+ * The rotation of one body's reset, given each atom's displacement y_i - a_i relative to
+ * the centres (small: formed without the absolute positions, so no digits are lost).
+ */
+template <class Displacement>
+RotationSolve solveBodyRotation(const BodyView& body, const double* oldPositions, const Vector3d& oldCenter,
+                                Displacement displacement) {
+    if (body.linear)
+        return solveLinearRotation(body, oldPositions, oldCenter, displacement);
+    // Torque target sum m a x y = sum m a x (y - a).
+    Matrix3d J = Matrix3d::Zero();
+    Vector3d target = Vector3d::Zero();
+    for (int k = 0; k < body.numAtoms; k++) {
+        int atom = body.atoms[k];
+        double m = body.masses[atom];
+        Vector3d ma = m * (point(oldPositions, atom) - oldCenter);
+        J.noalias() += ma * (point(oldPositions, atom) - oldCenter).transpose();
+        target += ma.cross(displacement(atom));
+    }
+    return solveResetRotationForTorque(J, target);
+}
+
+} // namespace
+
 RotationSolve resetBodyPositions(const BodyView& body, const double* oldPositions, double* newPositions) {
     const Vector3d oldCenter = centerOfMass(body, oldPositions);
     const Vector3d newCenter = centerOfMass(body, newPositions);
-    RotationSolve solve;
-    if (body.linear) {
-        solve = solveLinearRotation(body, oldPositions, newPositions, oldCenter, newCenter);
-        solve.rotationMinusIdentity = solve.rotation - Matrix3d::Identity();
-    } else {
-        // Torque target sum m a x y = sum m a x (y - a): formed from the small displacement.
-        Matrix3d J = Matrix3d::Zero();
-        Vector3d target = Vector3d::Zero();
-        for (int k = 0; k < body.numAtoms; k++) {
-            int atom = body.atoms[k];
-            double m = body.masses[atom];
-            Vector3d a = point(oldPositions, atom) - oldCenter;
-            Vector3d ma = m * a;
-            J.noalias() += ma * a.transpose();
-            target += ma.cross((point(newPositions, atom) - newCenter) - a);
-        }
-        solve = solveResetRotationForTorque(J, target);
-    }
+    RotationSolve solve = solveBodyRotation(body, oldPositions, oldCenter, [&](int atom) -> Vector3d {
+        return (point(newPositions, atom) - newCenter) - (point(oldPositions, atom) - oldCenter);
+    });
     const Matrix3d& delta = solve.rotationMinusIdentity;
     for (int k = 0; k < body.numAtoms; k++) {
         int atom = body.atoms[k];
         Vector3d a = point(oldPositions, atom) - oldCenter;
         point(newPositions, atom) = newCenter + (a + delta * a);
+    }
+    return solve;
+}
+
+RotationSolve driftAndResetBody(const BodyView& body, double stepSize, const double* positions, double* velocities,
+                                double* newPositions) {
+    const Vector3d center = centerOfMass(body, positions);
+    Vector3d momentum = Vector3d::Zero();
+    for (int k = 0; k < body.numAtoms; k++)
+        momentum += body.masses[body.atoms[k]] * point(velocities, body.atoms[k]);
+    const Vector3d V = momentum / body.totalMass;
+    // The drift moves atom i by h v_i; relative to the centres that is h (v_i - V).
+    RotationSolve solve = solveBodyRotation(body, positions, center, [&](int atom) -> Vector3d {
+        return stepSize * (point(velocities, atom) - V);
+    });
+    if (!solve.converged)
+        return solve;
+    const Matrix3d& delta = solve.rotationMinusIdentity;
+    const Vector3d shift = stepSize * V;
+    for (int k = 0; k < body.numAtoms; k++) {
+        int atom = body.atoms[k];
+        Vector3d turn = delta * (point(positions, atom) - center);
+        point(newPositions, atom) = point(positions, atom) + (shift + turn);
+        point(velocities, atom) = V + turn / stepSize;
     }
     return solve;
 }

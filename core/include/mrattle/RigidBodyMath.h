@@ -74,6 +74,17 @@ RotationSolve solveResetRotationForTorque(const Eigen::Matrix3d& J, const Eigen:
 RotationSolve resetBodyPositions(const BodyView& body, const double* oldPositions, double* newPositions);
 
 /**
+ * One body's drift and M-RATTLE position reset, from velocities: on entry velocities hold
+ * the half-kicked v_i; on exit newPositions holds x_i + h V + (P - 1)(x_i - c) and
+ * velocities hold V + (P - 1)(x_i - c) / h, which is (x_new - x) / h formed from
+ * displacements, so neither loses digits however far the body is from the origin.
+ * Only the body's atoms are touched; positions is not modified. If the solve does not
+ * converge, nothing is written.
+ */
+RotationSolve driftAndResetBody(const BodyView& body, double stepSize, const double* positions, double* velocities,
+                                double* newPositions);
+
+/**
  * RATTLE's velocity step for one body: replace the body's atom velocities by their
  * mass-weighted projection onto rigid-body motion at the given positions,
  * v_i = V + w x a_i with V the centre-of-mass velocity and w = I^-1 L.

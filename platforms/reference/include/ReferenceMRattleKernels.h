@@ -22,7 +22,7 @@ public:
 
 private:
     std::unique_ptr<ReferenceRigidBodyDynamics> dynamics;
-    std::vector<OpenMM::Vec3> newPositions;
+    std::vector<OpenMM::Vec3> newPositions, newVelocities;  // step buffers, swapped with the Context's
 };
 
 } // namespace MRattlePlugin

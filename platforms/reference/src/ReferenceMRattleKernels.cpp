@@ -10,6 +10,7 @@ using std::vector;
 void ReferenceIntegrateMRattleStepKernel::initialize(const System& system, const RigidBodySet& bodies) {
     dynamics.reset(new ReferenceRigidBodyDynamics(system, bodies));
     newPositions.resize(system.getNumParticles());
+    newVelocities.resize(system.getNumParticles());
 }
 
 void ReferenceIntegrateMRattleStepKernel::projectVelocities(ContextImpl& context, vector<Vec3>& velocities,
@@ -33,27 +34,34 @@ void ReferenceIntegrateMRattleStepKernel::integratePositions(ContextImpl& contex
     const double h = integrator.getStepSize();
     const int n = x.size();
 
-    // Half kick and drift into a buffer: the Context is only written once every body's
+    // Half kick and drift into buffers: the Context is only written once every body's
     // reset has succeeded, so a failed step leaves it as it was.
-    for (int i = 0; i < n; i++)
-        newPositions[i] = (inverseMass[i] != 0 ? x[i] + (v[i] + f[i] * (0.5 * h * inverseMass[i])) * h : x[i]);
+    for (int i = 0; i < n; i++) {
+        if (inverseMass[i] != 0) {
+            newVelocities[i] = v[i] + f[i] * (0.5 * h * inverseMass[i]);
+            newPositions[i] = x[i] + newVelocities[i] * h;
+        } else {
+            newVelocities[i] = v[i];
+            newPositions[i] = x[i];
+        }
+    }
+    // Free particles: RATTLE for their constraints, velocities from the displacement.
     dynamics->constrainFreePositions(x, newPositions, integrator.getConstraintTolerance());
+    const double inverseStep = 1.0 / h;
+    for (int i : dynamics->bodies().getFreeParticles())
+        newVelocities[i] = (newPositions[i] - x[i]) * inverseStep;
+    // Bodies: M-RATTLE's reset, new positions and velocities formed from displacements.
     const RigidBodySet& bodies = dynamics->bodies();
     for (int b = 0; b < bodies.getNumBodies(); b++) {
-        RigidBodyMath::RotationSolve solve =
-            RigidBodyMath::resetBodyPositions(bodies.view(b), coordinates(x), coordinates(newPositions));
+        RigidBodyMath::RotationSolve solve = RigidBodyMath::driftAndResetBody(
+            bodies.view(b), h, coordinates(x), coordinates(newVelocities), coordinates(newPositions));
         if (!solve.converged)
             throw OpenMMException("MRattleIntegrator: the position reset of rigid body " + std::to_string(b) +
                                   " found no rotation in " + std::to_string(RigidBodyMath::MaxRotationIterations) +
                                   " Newton iterations; the step size is too large for the forces, or they are not finite");
     }
-    const double inverseStep = 1.0 / h;
-    for (int i = 0; i < n; i++) {
-        if (inverseMass[i] != 0) {
-            v[i] = (newPositions[i] - x[i]) * inverseStep;
-            x[i] = newPositions[i];
-        }
-    }
+    x.swap(newPositions);
+    v.swap(newVelocities);
     ReferenceVirtualSites::computePositions(dynamics->system(), x);
 }
 
