@@ -127,8 +127,11 @@ TEST(BodySemantics, IntraBodyForcesChangeNothing) {
     double deviation = maxDeviation(x1, x2);
     std::cout << "intra-body forces: position difference after 500 steps " << deviation << " nm" << std::endl;
     EXPECT_GT(maxDeviation(plain.positions, x1), 1e-2);
-    // Round-off only: the bodies' own forces cancel in the reset and projection.
-    EXPECT_LT(deviation, 1e-11);
+    // Round-off only: the bodies' own forces cancel in the reset and projection. Forces
+    // over 1e3 kJ/mol/nm leave round-off of ~1e-16 nm per step, which 500 steps of a
+    // chaotic cluster amplify to ~1e-11 nm (the exact figure moves with the solver's
+    // arithmetic): 1e-10 is still eight orders below the 1e-2 nm these forces move atoms.
+    EXPECT_LT(deviation, 1e-10);
 }
 
 TEST(BodySemantics, ExplicitBodiesWithFreeParticlesFollowRattle) {

@@ -129,6 +129,12 @@ Matrix3d rotationMinusIdentity(const Vector3d& d) {
     return a * D + b * D * D;
 }
 
+/** cay(d) - 1 = (1 - [d]/2)^-1 (1 + [d]/2) - 1 = 2 ([w]x + [w]x^2) / (1 + |w|^2), w = d/2. */
+Matrix3d cayleyMinusIdentity(const Vector3d& d) {
+    Matrix3d W = crossMatrix(0.5 * d);
+    return (2.0 / (1.0 + 0.25 * d.squaredNorm())) * (W + W * W);
+}
+
 } // namespace
 
 Matrix3d rotationFromVector(const Vector3d& d) {
@@ -143,6 +149,8 @@ RotationSolve solveResetRotationForTorque(const Matrix3d& J, const Vector3d& tar
     // The rotation of one step is small, so P = 1 + Delta is carried as Delta: the residual
     // vex(P J - J P^T) = vex(Delta J - J Delta^T) (J symmetric) then has round-off relative
     // to the rotation itself, not to J, and the torque condition holds to that precision.
+    // Updates are Cayley rotations, orthogonal to round-off without trigonometry; they
+    // agree with exp([d]x) to first order, so Newton still converges quadratically.
     RotationSolve result;
     result.iterations = MaxRotationIterations;
     Matrix3d delta = Matrix3d::Zero();
@@ -159,11 +167,11 @@ RotationSolve solveResetRotationForTorque(const Matrix3d& J, const Vector3d& tar
         Vector3d d = -K.inverse() * r;
         if (!d.allFinite())
             break;
-        Matrix3d E = rotationMinusIdentity(d);
-        delta = E + delta + E * delta;
-        // Newton converges quadratically: once the correction is this small against the
-        // rotation, the next would be below round-off.
-        if (d.norm() <= 1e-13 * delta.norm()) {
+        Matrix3d E = cayleyMinusIdentity(d);
+        delta += E + E * delta;
+        // Quadratic convergence: after a correction of relative size e the error is about
+        // e^2, so a correction below 1e-7 of the rotation leaves it at round-off.
+        if (d.squaredNorm() <= 1e-14 * delta.squaredNorm()) {
             result.iterations = iteration + 1;
             result.converged = true;
             break;
