@@ -4,6 +4,8 @@ set -euo pipefail
 root="$(cd "$(dirname "$0")/.." && pwd)"
 "$root/scripts/install-deps.sh"
 build="${MRATTLE_BUILD_DIR:-$root/build}"
-cmake -S "$root" -B "$build" -DCMAKE_BUILD_TYPE=Release -DPython3_EXECUTABLE=/usr/bin/python3 > "$build.cmake.log" 2>&1 || {
-    cat "$build.cmake.log"; exit 1; }
+mkdir -p "$build"
+log="$build/configure.log"
+cmake -S "$root" -B "$build" -DCMAKE_BUILD_TYPE=Release -DPython3_EXECUTABLE=/usr/bin/python3 > "$log" 2>&1 || {
+    cat "$log"; exit 1; }
 cmake --build "$build" -j"$(nproc)"

@@ -1,4 +1,6 @@
 """openmm.XmlSerializer, copy and pickle give back the plugin's integrator classes."""
+import xml.etree.ElementTree as ElementTree
+
 import openmm
 
 from . import integrators
@@ -22,8 +24,20 @@ def asPluginIntegrator(integrator):
     return proxy
 
 
-def _returningPluginIntegrators(function):
+def _checkWellFormed(document):
+    """OpenMM 7.7's XML reader (irrXML) reads past the end of a truncated document and can
+    crash the process: refuse anything that is not well-formed XML before it gets there."""
+    try:
+        ElementTree.fromstring(document)
+    except ElementTree.ParseError as error:
+        raise openmm.OpenMMException('XmlSerializer.deserialize: not a well-formed XML document (%s); '
+                         'the file may be truncated or corrupted' % error) from None
+
+
+def _returningPluginIntegrators(function, checkDocument=False):
     def wrapper(*arguments):
+        if checkDocument and arguments and isinstance(arguments[0], str):
+            _checkWellFormed(arguments[0])
         return asPluginIntegrator(function(*arguments))
     wrapper.__doc__ = function.__doc__
     wrapper._mrattleWrapped = True
@@ -36,4 +50,5 @@ def installXmlSerializerHooks():
     for name in ('_deserializeIntegrator', '_cloneIntegrator'):
         function = getattr(openmm.XmlSerializer, name)
         if not getattr(function, '_mrattleWrapped', False):
-            setattr(openmm.XmlSerializer, name, _returningPluginIntegrators(function))
+            setattr(openmm.XmlSerializer, name,
+                    _returningPluginIntegrators(function, checkDocument=(name == '_deserializeIntegrator')))

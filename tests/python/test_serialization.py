@@ -62,3 +62,18 @@ def test_simulation_checkpoint_file(tmp_path):
     restarted.loadCheckpoint(path)
     restarted.step(10)
     assert np.array_equal(restarted.context.getState(getPositions=True).getPositions(asNumpy=True), first)
+
+
+def test_truncated_integrator_documents_raise_instead_of_crashing():
+    # OpenMM 7.7's own XML reader can crash on a document cut inside a tag; after
+    # 'import mrattle' every cut is refused with a Python exception before it gets there.
+    integrator = mrattle.MRattleIntegrator(0.002)
+    integrator.addRigidBody([0, 1, 2])
+    integrator.addRigidBody([3, 4, 5])
+    document = openmm.XmlSerializer.serialize(integrator)
+    end = document.rindex('>')
+    for length in range(1, end):
+        # OpenMM's own front end raises ValueError when no element name is left at all.
+        with pytest.raises((ValueError, openmm.OpenMMException)):
+            openmm.XmlSerializer.deserialize(document[:length])
+    assert openmm.XmlSerializer.deserialize(document).getNumRigidBodies() == 2
