@@ -77,3 +77,20 @@ def test_truncated_integrator_documents_raise_instead_of_crashing():
         with pytest.raises((ValueError, openmm.OpenMMException)):
             openmm.XmlSerializer.deserialize(document[:length])
     assert openmm.XmlSerializer.deserialize(document).getNumRigidBodies() == 2
+
+
+def test_simulation_reads_the_integrator_from_an_xml_file(tmp_path):
+    model = mrattle.models.benzeneCluster()
+    integrator = mrattle.MRattleIntegrator(0.002)
+    integrator.setConstraintTolerance(1e-7)
+    path = tmp_path/'integrator.xml'
+    path.write_text(openmm.XmlSerializer.serialize(integrator))
+    simulation = openmm.app.Simulation(model.topology, model.system, str(path),
+                                       openmm.Platform.getPlatformByName('Reference'))
+    assert isinstance(simulation.integrator, mrattle.MRattleIntegrator)
+    assert simulation.integrator.getConstraintTolerance() == 1e-7
+    simulation.context.setPositions(model.positions)
+    simulation.context.setVelocities(model.velocities)
+    simulation.step(5)
+    assert simulation.currentStep == 5
+    assert simulation.integrator.getNumDegreesOfFreedom() == 27*6
