@@ -24,13 +24,6 @@ public:
      * @param stepSize  the step size in picoseconds
      */
     explicit MRattleIntegrator(double stepSize);
-    /**
-     * Advance the simulation.
-     *
-     * @param steps  the number of time steps to take
-     */
-    void step(int steps) override;
-
 protected:
     std::string getStepKernelName() const override;
 };

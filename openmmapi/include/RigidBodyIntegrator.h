@@ -44,6 +44,14 @@ public:
     int getNumDegreesOfFreedom() const;
     /** The body bookkeeping in effect (throws if not bound). */
     const RigidBodySet& getRigidBodySet() const;
+    /**
+     * Advance the simulation: every step updates the Context's state (CMMotionRemover,
+     * thermostats, barostats), then runs the kernel's two halves around one evaluation of
+     * the integration force groups at the new positions.
+     *
+     * @param steps  the number of time steps to take
+     */
+    void step(int steps) override;
 
 protected:
     RigidBodyIntegrator();
@@ -84,19 +92,19 @@ protected:
 
     /** Throw unless bound to a Context. */
     void requireContext() const;
+
+    mutable OpenMM::Kernel kernel;
+    RigidBodySet bodySet;
+
+private:
     /** Start of a step: let forces update the state; make velocities rigid if something changed them. */
     void beginStep();
     /** Compute forces at the current positions unless the cached ones are valid. */
     void ensureForces();
     /** Compute forces at the current positions (after the positions moved). */
     void computeForces();
-    /** Every step() calls this at its end: remember the Context's state, which a failed loadCheckpoint() puts back. */
+    /** At the end of step(): remember the Context's state, which a failed loadCheckpoint() puts back. */
     void endSteps();
-
-    mutable OpenMM::Kernel kernel;
-    RigidBodySet bodySet;
-
-private:
     std::vector<std::vector<int> > declaredBodies;
     bool forcesAreValid = false;
     bool restoringCheckpoint = false;

@@ -28,13 +28,6 @@ public:
      * @param stepSize  the step size in picoseconds
      */
     explicit RigidSplittingIntegrator(double stepSize);
-    /**
-     * Advance the simulation.
-     *
-     * @param steps  the number of time steps to take
-     */
-    void step(int steps) override;
-
 protected:
     std::string getStepKernelName() const override;
 };

@@ -12,16 +12,3 @@ MRattleIntegrator::MRattleIntegrator(double stepSize) {
 std::string MRattleIntegrator::getStepKernelName() const {
     return IntegrateMRattleStepKernel::Name();
 }
-
-void MRattleIntegrator::step(int steps) {
-    requireContext();
-    IntegrateMRattleStepKernel& stepKernel = kernel.getAs<IntegrateMRattleStepKernel>();
-    for (int i = 0; i < steps; i++) {
-        beginStep();
-        ensureForces();
-        stepKernel.integratePositions(*context, *this);
-        computeForces();
-        stepKernel.integrateVelocities(*context, *this);
-    }
-    endSteps();
-}

@@ -411,6 +411,19 @@ vector<Vec3> RigidBodyIntegrator::getVelocitiesForTemperature(const System& syst
     return velocities;
 }
 
+void RigidBodyIntegrator::step(int steps) {
+    requireContext();
+    RigidBodyKernel& stepKernel = kernel.getAs<RigidBodyKernel>();
+    for (int i = 0; i < steps; i++) {
+        beginStep();
+        ensureForces();
+        stepKernel.integratePositions(*context, *this);
+        computeForces();
+        stepKernel.integrateVelocities(*context, *this);
+    }
+    endSteps();
+}
+
 void RigidBodyIntegrator::beginStep() {
     restoringCheckpoint = false;
     rollbackStateIsCurrent = false;

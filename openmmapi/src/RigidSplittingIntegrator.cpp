@@ -12,16 +12,3 @@ RigidSplittingIntegrator::RigidSplittingIntegrator(double stepSize) {
 std::string RigidSplittingIntegrator::getStepKernelName() const {
     return IntegrateRigidSplittingStepKernel::Name();
 }
-
-void RigidSplittingIntegrator::step(int steps) {
-    requireContext();
-    IntegrateRigidSplittingStepKernel& stepKernel = kernel.getAs<IntegrateRigidSplittingStepKernel>();
-    for (int i = 0; i < steps; i++) {
-        beginStep();
-        ensureForces();
-        stepKernel.integratePositions(*context, *this);
-        computeForces();
-        stepKernel.integrateVelocities(*context, *this);
-    }
-    endSteps();
-}

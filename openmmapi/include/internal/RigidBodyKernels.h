@@ -15,12 +15,13 @@ class ContextImpl;
 
 namespace MRattlePlugin {
 
-class MRattleIntegrator;
-class RigidSplittingIntegrator;
+class RigidBodyIntegrator;
 
 /**
- * Operations every rigid-body integrator needs from its platform: velocity projection
- * onto rigid-body motion (with free-particle constraints) and the kinetic energy.
+ * What every rigid-body integrator needs from its platform: one step in two halves around
+ * the force evaluation at the new positions, velocity projection onto rigid-body motion
+ * (with free-particle constraints) and the kinetic energy. Each integrator has its own
+ * kernel name (a subclass below) so a platform can implement each one.
  */
 class OPENMM_EXPORT_MRATTLE RigidBodyKernel : public OpenMM::KernelImpl {
 public:
@@ -41,11 +42,13 @@ public:
     virtual void projectContextVelocities(OpenMM::ContextImpl& context, double tolerance) = 0;
     /** Sum of m v^2 / 2 over the Context's velocities. */
     virtual double computeKineticEnergy(OpenMM::ContextImpl& context) = 0;
+    /** First half: half kick, drift and the integrator's position update, free-particle constraints, virtual sites. */
+    virtual void integratePositions(OpenMM::ContextImpl& context, const RigidBodyIntegrator& integrator) = 0;
+    /** Second half, with the forces at the new positions: half kick, velocity reset; advances time and step count. */
+    virtual void integrateVelocities(OpenMM::ContextImpl& context, const RigidBodyIntegrator& integrator) = 0;
 };
 
-/**
- * One M-RATTLE step, split around the force evaluation at the new positions.
- */
+/** M-RATTLE: the position update resets each body with the 3 + 3 conditions. */
 class OPENMM_EXPORT_MRATTLE IntegrateMRattleStepKernel : public RigidBodyKernel {
 public:
     static std::string Name() {
@@ -54,16 +57,9 @@ public:
     IntegrateMRattleStepKernel(const std::string& name, const OpenMM::Platform& platform) : RigidBodyKernel(name, platform) {
     }
     ~IntegrateMRattleStepKernel() override;
-    /** Half kick, drift, position reset (bodies by M-RATTLE, free constraints by RATTLE), virtual sites. */
-    virtual void integratePositions(OpenMM::ContextImpl& context, const MRattleIntegrator& integrator) = 0;
-    /** Half kick with the new forces, velocity reset; advances time and step count. */
-    virtual void integrateVelocities(OpenMM::ContextImpl& context, const MRattleIntegrator& integrator) = 0;
 };
 
-/**
- * One step of the symplectic splitting baseline (RigidSplittingIntegrator), split around
- * the force evaluation at the new positions.
- */
+/** The symplectic splitting baseline: the position update is a free-rotor splitting per body. */
 class OPENMM_EXPORT_MRATTLE IntegrateRigidSplittingStepKernel : public RigidBodyKernel {
 public:
     static std::string Name() {
@@ -73,10 +69,6 @@ public:
         : RigidBodyKernel(name, platform) {
     }
     ~IntegrateRigidSplittingStepKernel() override;
-    /** Half kick, drift and free rotor of every body; velocity Verlet and RATTLE for free particles; virtual sites. */
-    virtual void integratePositions(OpenMM::ContextImpl& context, const RigidSplittingIntegrator& integrator) = 0;
-    /** Half kick with the new forces, velocity reset; advances time and step count. */
-    virtual void integrateVelocities(OpenMM::ContextImpl& context, const RigidSplittingIntegrator& integrator) = 0;
 };
 
 } // namespace MRattlePlugin

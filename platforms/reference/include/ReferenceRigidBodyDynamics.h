@@ -32,6 +32,13 @@ public:
     /** Rigid-body projection of velocities at the given positions, and free constraints. */
     void projectVelocities(std::vector<OpenMM::Vec3>& positions, std::vector<OpenMM::Vec3>& velocities, double tolerance);
     double kineticEnergy(const std::vector<OpenMM::Vec3>& velocities) const;
+    /**
+     * The second half of every rigid-body step, with the forces at the new positions: half
+     * kick, then the velocity reset (free constraints and rigid-body projection, which for
+     * a rigid body is exactly a half kick of its momentum and angular momentum); advances
+     * the clock.
+     */
+    void kickAndProject(OpenMM::ContextImpl& context, double stepSize, double tolerance);
 
     const RigidBodySet& bodies() const {
         return *bodySet;

@@ -1,28 +1,16 @@
 #ifndef MRATTLE_REFERENCE_RIGID_SPLITTING_KERNELS_H_
 #define MRATTLE_REFERENCE_RIGID_SPLITTING_KERNELS_H_
 
-#include "ReferenceRigidBodyDynamics.h"
+#include "ReferenceRigidBodyStepKernel.h"
 #include "internal/RigidBodyKernels.h"
-#include <memory>
 
 namespace MRattlePlugin {
 
 /** The splitting baseline on the Reference platform, also registered on the CPU platform. */
-class ReferenceIntegrateRigidSplittingStepKernel : public IntegrateRigidSplittingStepKernel {
+class ReferenceIntegrateRigidSplittingStepKernel : public ReferenceRigidBodyStepKernel<IntegrateRigidSplittingStepKernel> {
 public:
-    ReferenceIntegrateRigidSplittingStepKernel(const std::string& name, const OpenMM::Platform& platform)
-        : IntegrateRigidSplittingStepKernel(name, platform) {
-    }
-    void initialize(const OpenMM::System& system, const RigidBodySet& bodies) override;
-    void projectVelocities(OpenMM::ContextImpl& context, std::vector<OpenMM::Vec3>& velocities, double tolerance) override;
-    void projectContextVelocities(OpenMM::ContextImpl& context, double tolerance) override;
-    double computeKineticEnergy(OpenMM::ContextImpl& context) override;
-    void integratePositions(OpenMM::ContextImpl& context, const RigidSplittingIntegrator& integrator) override;
-    void integrateVelocities(OpenMM::ContextImpl& context, const RigidSplittingIntegrator& integrator) override;
-
-private:
-    std::unique_ptr<ReferenceRigidBodyDynamics> dynamics;
-    std::vector<OpenMM::Vec3> newPositions, newVelocities;
+    using ReferenceRigidBodyStepKernel::ReferenceRigidBodyStepKernel;
+    void integratePositions(OpenMM::ContextImpl& context, const RigidBodyIntegrator& integrator) override;
 };
 
 } // namespace MRattlePlugin

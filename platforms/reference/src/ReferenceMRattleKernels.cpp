@@ -1,5 +1,4 @@
 #include "ReferenceMRattleKernels.h"
-#include "MRattleIntegrator.h"
 #include "openmm/OpenMMException.h"
 #include "openmm/reference/ReferenceVirtualSites.h"
 
@@ -7,26 +6,7 @@ using namespace MRattlePlugin;
 using namespace OpenMM;
 using std::vector;
 
-void ReferenceIntegrateMRattleStepKernel::initialize(const System& system, const RigidBodySet& bodies) {
-    dynamics.reset(new ReferenceRigidBodyDynamics(system, bodies));
-    newPositions.resize(system.getNumParticles());
-    newVelocities.resize(system.getNumParticles());
-}
-
-void ReferenceIntegrateMRattleStepKernel::projectVelocities(ContextImpl& context, vector<Vec3>& velocities,
-                                                           double tolerance) {
-    dynamics->projectVelocities(ReferenceRigidBodyDynamics::positions(context), velocities, tolerance);
-}
-
-void ReferenceIntegrateMRattleStepKernel::projectContextVelocities(ContextImpl& context, double tolerance) {
-    projectVelocities(context, ReferenceRigidBodyDynamics::velocities(context), tolerance);
-}
-
-double ReferenceIntegrateMRattleStepKernel::computeKineticEnergy(ContextImpl& context) {
-    return dynamics->kineticEnergy(ReferenceRigidBodyDynamics::velocities(context));
-}
-
-void ReferenceIntegrateMRattleStepKernel::integratePositions(ContextImpl& context, const MRattleIntegrator& integrator) {
+void ReferenceIntegrateMRattleStepKernel::integratePositions(ContextImpl& context, const RigidBodyIntegrator& integrator) {
     vector<Vec3>& x = ReferenceRigidBodyDynamics::positions(context);
     vector<Vec3>& v = ReferenceRigidBodyDynamics::velocities(context);
     const vector<Vec3>& f = ReferenceRigidBodyDynamics::forces(context);
@@ -63,17 +43,4 @@ void ReferenceIntegrateMRattleStepKernel::integratePositions(ContextImpl& contex
     x.swap(newPositions);
     v.swap(newVelocities);
     ReferenceVirtualSites::computePositions(dynamics->system(), x);
-}
-
-void ReferenceIntegrateMRattleStepKernel::integrateVelocities(ContextImpl& context, const MRattleIntegrator& integrator) {
-    vector<Vec3>& x = ReferenceRigidBodyDynamics::positions(context);
-    vector<Vec3>& v = ReferenceRigidBodyDynamics::velocities(context);
-    const vector<Vec3>& f = ReferenceRigidBodyDynamics::forces(context);
-    const vector<double>& inverseMass = dynamics->inverseMasses();
-    const double halfStep = 0.5 * integrator.getStepSize();
-    for (size_t i = 0; i < v.size(); i++)
-        if (inverseMass[i] != 0)
-            v[i] += f[i] * (halfStep * inverseMass[i]);
-    dynamics->projectVelocities(x, v, integrator.getConstraintTolerance());
-    ReferenceRigidBodyDynamics::advanceClock(context, integrator.getStepSize());
 }

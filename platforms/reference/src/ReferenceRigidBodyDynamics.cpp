@@ -70,6 +70,18 @@ void ReferenceRigidBodyDynamics::projectVelocities(vector<Vec3>& positions, vect
         RigidBodyMath::projectBodyVelocities(bodySet->view(b), x, v);
 }
 
+void ReferenceRigidBodyDynamics::kickAndProject(ContextImpl& context, double stepSize, double tolerance) {
+    vector<Vec3>& x = positions(context);
+    vector<Vec3>& v = velocities(context);
+    const vector<Vec3>& f = forces(context);
+    const double halfStep = 0.5 * stepSize;
+    for (size_t i = 0; i < v.size(); i++)
+        if (inverseMass[i] != 0)
+            v[i] += f[i] * (halfStep * inverseMass[i]);
+    projectVelocities(x, v, tolerance);
+    advanceClock(context, stepSize);
+}
+
 double ReferenceRigidBodyDynamics::kineticEnergy(const vector<Vec3>& velocities) const {
     double energy = 0;
     for (size_t i = 0; i < velocities.size(); i++)

@@ -1,5 +1,4 @@
 #include "ReferenceRigidSplittingKernels.h"
-#include "RigidSplittingIntegrator.h"
 #include "mrattle/RigidBodyRotor.h"
 #include "openmm/reference/ReferenceVirtualSites.h"
 
@@ -7,27 +6,8 @@ using namespace MRattlePlugin;
 using namespace OpenMM;
 using std::vector;
 
-void ReferenceIntegrateRigidSplittingStepKernel::initialize(const System& system, const RigidBodySet& bodies) {
-    dynamics.reset(new ReferenceRigidBodyDynamics(system, bodies));
-    newPositions.resize(system.getNumParticles());
-    newVelocities.resize(system.getNumParticles());
-}
-
-void ReferenceIntegrateRigidSplittingStepKernel::projectVelocities(ContextImpl& context, vector<Vec3>& velocities,
-                                                                  double tolerance) {
-    dynamics->projectVelocities(ReferenceRigidBodyDynamics::positions(context), velocities, tolerance);
-}
-
-void ReferenceIntegrateRigidSplittingStepKernel::projectContextVelocities(ContextImpl& context, double tolerance) {
-    projectVelocities(context, ReferenceRigidBodyDynamics::velocities(context), tolerance);
-}
-
-double ReferenceIntegrateRigidSplittingStepKernel::computeKineticEnergy(ContextImpl& context) {
-    return dynamics->kineticEnergy(ReferenceRigidBodyDynamics::velocities(context));
-}
-
 void ReferenceIntegrateRigidSplittingStepKernel::integratePositions(ContextImpl& context,
-                                                                   const RigidSplittingIntegrator& integrator) {
+                                                                   const RigidBodyIntegrator& integrator) {
     vector<Vec3>& x = ReferenceRigidBodyDynamics::positions(context);
     vector<Vec3>& v = ReferenceRigidBodyDynamics::velocities(context);
     vector<Vec3>& f = ReferenceRigidBodyDynamics::forces(context);
@@ -52,20 +32,4 @@ void ReferenceIntegrateRigidSplittingStepKernel::integratePositions(ContextImpl&
         }
     }
     ReferenceVirtualSites::computePositions(dynamics->system(), x);
-}
-
-void ReferenceIntegrateRigidSplittingStepKernel::integrateVelocities(ContextImpl& context,
-                                                                    const RigidSplittingIntegrator& integrator) {
-    // The second half kick of momentum and angular momentum is exactly a Cartesian half
-    // kick followed by the rigid-body projection at the new positions (as in M-RATTLE).
-    vector<Vec3>& x = ReferenceRigidBodyDynamics::positions(context);
-    vector<Vec3>& v = ReferenceRigidBodyDynamics::velocities(context);
-    const vector<Vec3>& f = ReferenceRigidBodyDynamics::forces(context);
-    const vector<double>& inverseMass = dynamics->inverseMasses();
-    const double halfStep = 0.5 * integrator.getStepSize();
-    for (size_t i = 0; i < v.size(); i++)
-        if (inverseMass[i] != 0)
-            v[i] += f[i] * (halfStep * inverseMass[i]);
-    dynamics->projectVelocities(x, v, integrator.getConstraintTolerance());
-    ReferenceRigidBodyDynamics::advanceClock(context, integrator.getStepSize());
 }
