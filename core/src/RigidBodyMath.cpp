@@ -1,4 +1,5 @@
 #include "mrattle/RigidBodyMath.h"
+#include "mrattle/Coordinates.h"
 #include <cmath>
 #include <limits>
 
@@ -10,14 +11,6 @@ namespace MRattlePlugin {
 namespace RigidBodyMath {
 
 namespace {
-
-Map<const Vector3d> point(const double* array, int atom) {
-    return Map<const Vector3d>(array + 3 * atom);
-}
-
-Map<Vector3d> point(double* array, int atom) {
-    return Map<Vector3d>(array + 3 * atom);
-}
 
 Vector3d vexOfSkewPart(const Matrix3d& A) {
     // vex(A - A^T)

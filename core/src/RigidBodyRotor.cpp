@@ -1,4 +1,5 @@
 #include "mrattle/RigidBodyRotor.h"
+#include "mrattle/Coordinates.h"
 #include <cmath>
 
 using Eigen::Map;
@@ -7,18 +8,6 @@ using Eigen::Vector3d;
 
 namespace MRattlePlugin {
 namespace RigidBodyRotor {
-
-namespace {
-
-Map<const Vector3d> point(const double* array, int atom) {
-    return Map<const Vector3d>(array + 3 * atom);
-}
-
-Map<Vector3d> point(double* array, int atom) {
-    return Map<Vector3d>(array + 3 * atom);
-}
-
-} // namespace
 
 PrincipalFrame principalFrame(const Matrix3d& secondMoment) {
     // Eigenvalues of J ascend, so the inertia moments tr(J) - lambda descend: reverse.
