@@ -54,3 +54,49 @@ def _time_key(timings):
         if key.startswith("median") or key.startswith("time"):
             return key
     raise KeyError("step_cost output has no timing column: %s" % list(timings[0]))
+
+
+def micro_benchmarks(binary, log):
+    """Google Benchmark timings of the numerical core: ns per body (and Newton iterations)."""
+    import json
+    done = subprocess.run([binary, "--benchmark_format=json", "--benchmark_min_time=0.2"], check=True,
+                          capture_output=True, text=True)
+    rows = []
+    for b in json.loads(done.stdout)["benchmarks"]:
+        name, _, k = b["name"].partition("/k:")
+        row = {"benchmark": name, "atoms_per_body": int(k) if k else "", "ns_per_body": b["per_body"] * 1e9}
+        if "newton_iterations" in b:
+            row["newton_iterations"] = b["newton_iterations"]
+        rows.append(row)
+        log("  %-26s k=%-3s %8.1f ns per body" % (name, k, row["ns_per_body"]))
+    return rows
+
+
+def profile(step_cost, atoms, log):
+    """Where an M-RATTLE step spends its time (perf, if installed): symbol and share."""
+    import os
+    import shutil
+    import tempfile
+    if shutil.which("perf") is None:
+        log("  perf is not installed (Debian: linux-perf): no profile")
+        return []
+    with tempfile.TemporaryDirectory() as scratch:
+        data = os.path.join(scratch, "perf.data")
+        record = subprocess.run(["perf", "record", "-q", "-o", data, "--", step_cost, "--platforms", "Reference",
+                                 "--bodies", "1000", "--atoms", str(atoms), "--integrators", "mrattle",
+                                 "--repeats", "5", "--batch-seconds", "0.2", "--out", os.devnull,
+                                 "--ratios", os.devnull], capture_output=True, text=True)
+        if record.returncode != 0:
+            log("  perf record failed: %s" % record.stderr.strip().splitlines()[-1:])
+            return []
+        report = subprocess.run(["perf", "report", "-i", data, "--stdio", "--no-children", "--sort", "symbol",
+                                 "--percent-limit", "1"], capture_output=True, text=True)
+    rows = []
+    for line in report.stdout.splitlines():
+        parts = line.split()
+        if len(parts) >= 3 and parts[0].endswith("%") and parts[1] == "[.]":
+            symbol = " ".join(p for p in parts[2:] if p != "-")
+            rows.append({"share_percent": float(parts[0][:-1]), "function": symbol})
+    for r in rows[:6]:
+        log("  %5.1f%%  %s" % (r["share_percent"], r["function"]))
+    return rows
