@@ -135,9 +135,11 @@ def write_csv(path, rows):
     rows = [{k: v for k, v in r.items() if k not in ("context", "integrator")} for r in rows]
     if not rows:
         return
-    keys = list(rows[0].keys())
+    keys = []
+    for r in rows:  # every column any row has, in first-seen order
+        keys += [k for k in r if k not in keys]
     with open(path, "w", newline="") as f:
-        w = csv.DictWriter(f, fieldnames=keys)
+        w = csv.DictWriter(f, fieldnames=keys, restval="")
         w.writeheader()
         w.writerows(rows)
 
