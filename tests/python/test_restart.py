@@ -17,9 +17,18 @@ from conftest import platformProperties
 STEPS_BEFORE, STEPS_AFTER = 20, 30
 
 
-def waterSimulation(platform, integrator=None):
-    """27 rigid waters in a periodic box with a cutoff (the CPU platform keeps a neighbour list)."""
-    model = mrattle.models.waterBox(numMolecules=27, cutoff=0.45*unit.nanometers)
+# Models restarted in a new process: the builder call, evaluated here and in the script.
+MODELS = {
+    # 27 rigid waters in a periodic box with a cutoff (the CPU platform keeps a neighbour list)
+    'water': 'mrattle.models.waterBox(numMolecules=27, cutoff=0.45*unit.nanometers)',
+    # the 27-benzene cluster in vacuum
+    'benzene': 'mrattle.models.benzeneCluster()',
+}
+
+
+def waterSimulation(platform, integrator=None, modelName='water'):
+    """A Simulation of one of MODELS, velocities at 300 K."""
+    model = eval(MODELS[modelName])
     if integrator is None:
         integrator = mrattle.MRattleIntegrator(2*unit.femtoseconds)
     simulation = app.Simulation(model.topology, model.system, integrator, platform, platformProperties(platform))
@@ -62,8 +71,8 @@ RESTART_SCRIPT = textwrap.dedent('''
     import openmm
     from openmm import app, unit
     import mrattle
-    platformName, checkpoint, output, steps = sys.argv[1], sys.argv[2], sys.argv[3], int(sys.argv[4])
-    model = mrattle.models.waterBox(numMolecules=27, cutoff=0.45*unit.nanometers)
+    platformName, checkpoint, output, steps, builder = sys.argv[1], sys.argv[2], sys.argv[3], int(sys.argv[4]), sys.argv[5]
+    model = eval(builder)
     platform = openmm.Platform.getPlatformByName(platformName)
     properties = {'Threads': '1'} if platformName == 'CPU' else {}
     simulation = app.Simulation(model.topology, model.system, mrattle.MRattleIntegrator(2*unit.femtoseconds),
@@ -77,8 +86,9 @@ RESTART_SCRIPT = textwrap.dedent('''
 ''')
 
 
-def test_checkpoint_restart_in_new_process_is_bit_for_bit(platform, tmp_path):
-    simulation = waterSimulation(platform)
+@pytest.mark.parametrize('modelName', sorted(MODELS))
+def test_checkpoint_restart_in_new_process_is_bit_for_bit(platform, tmp_path, modelName):
+    simulation = waterSimulation(platform, modelName=modelName)
     simulation.step(STEPS_BEFORE)
     checkpoint = str(tmp_path/'run.chk')
     simulation.saveCheckpoint(checkpoint)
@@ -87,7 +97,8 @@ def test_checkpoint_restart_in_new_process_is_bit_for_bit(platform, tmp_path):
 
     script, output = tmp_path/'restart.py', str(tmp_path/'restarted.npz')
     script.write_text(RESTART_SCRIPT)
-    result = subprocess.run([sys.executable, str(script), platform.getName(), checkpoint, output, str(STEPS_AFTER)],
+    result = subprocess.run([sys.executable, str(script), platform.getName(), checkpoint, output, str(STEPS_AFTER),
+                             MODELS[modelName]],
                             capture_output=True, text=True, env=dict(os.environ), timeout=300)
     assert result.returncode == 0, result.stderr
     restarted = np.load(output)
