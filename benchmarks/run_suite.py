@@ -109,14 +109,14 @@ def main():
         md += accuracy_section(iso, rows, order_rows, planar, ccma, q)
 
     if "sampling" in parts:
-        log("sampling: long NVE runs")
-        total = 60.0 if not q else 1.0
-        res = {m: sampling.run(m, total, 2.0, 200.0, 11, log) for m in ("M-RATTLE", "splitting")}
-        eq = 10.0 if not q else 0.2
-        srows = sampling.compare(res, eq)
+        log("sampling: independent NVE runs of the cluster, both methods")
+        seeds = [11, 12, 13, 14, 15, 16] if not q else [11, 12]
+        per_run, eq, step = (24.0, 4.0, 4.0) if not q else (0.8, 0.2, 4.0)
+        res = {m: sampling.run_many(m, seeds, per_run, eq, step, 200.0, log) for m in ("M-RATTLE", "splitting")}
+        srows = sampling.compare(res)
         write_csv(os.path.join(results_dir, "sampling_comparison.csv"), srows)
-        sampling.plot(res, eq, os.path.join(results_dir, "sampling_histograms.png"))
-        md += sampling_section(srows, total, eq, q)
+        sampling.plot(res, os.path.join(results_dir, "sampling_histograms.png"))
+        md += sampling_section(srows, len(seeds), per_run, eq, step, q)
 
     if "gains" in parts:
         log("gains: liquid benzene with PME")
@@ -271,16 +271,21 @@ def limits_section(timings, ratios, micro, prof):
     return md
 
 
-def sampling_section(rows, total, eq, quick):
+def sampling_section(rows, runs, per_run, eq, step, quick):
     md = ["\n## Sampling\n"]
-    md.append("Two NVE runs of the 27-benzene cluster (200 K start, 2 fs, CPU platform), %g ps each, first %g ps "
-              "discarded, a frame every 100 fs. Kolmogorov-Smirnov two-sample tests on decorrelated series "
-              "(every g-th frame, g the statistical inefficiency); p > 0.05 means no detectable difference. "
-              "Each run is one trajectory, so the test compares the two trajectories' distributions.\n" % (total, eq))
+    md.append("For each method, %d independent NVE runs of the 27-benzene cluster (lattice start at 200 K with "
+              "different orientations and velocities per seed, the same seeds for both methods; %g fs steps, CPU "
+              "platform), %g ps each with the first %g ps dropped, a frame every 100 fs. Each run's series is "
+              "thinned to roughly independent samples (every g-th frame, g its statistical inefficiency) and the "
+              "runs are pooled; Kolmogorov-Smirnov two-sample tests compare the methods (p > 0.05: no detectable "
+              "difference). Equipartition: with 3 translational and 3 rotational degrees of freedom per molecule, "
+              "the mean rotational and translational kinetic energies should be equal.\n" % (runs, step, per_run, eq))
     md.append(table(rows, [("quantity", "quantity"), ("M-RATTLE mean", "M-RATTLE mean"),
                            ("splitting mean", "splitting mean"), ("KS D", "KS D"), ("KS p", "KS p"),
                            ("independent samples", "independent samples")],
                     {"M-RATTLE mean": "%.4g", "splitting mean": "%.4g", "KS D": "%.3f", "KS p": "%.3f"}))
+    md.append("Means are over all frames after equilibration (kelvin for temperature, kJ/mol per molecule for "
+              "kinetic energies).\n")
     md.append("![sampling](results/sampling_histograms.png)\n")
     return md
 

@@ -9,6 +9,21 @@ from . import common, stats
 KB = 0.00831446261815324  # kJ/mol/K
 
 
+def run_many(method, seeds, total_ps, equilibrate_ps, step_fs, temperature, log):
+    """Independent runs (one per seed; the same seeds for every method), equilibration dropped.
+
+    Returns per-quantity lists with one array per run, so that each run's series can be
+    decorrelated on its own before the runs are pooled.
+    """
+    pooled = {"temperature": [], "translational": [], "rotational": [], "cc": []}
+    for seed in seeds:
+        r = run(method, total_ps, step_fs, temperature, seed, log)
+        skip = int(round(equilibrate_ps / r["frame_ps"]))
+        for key in pooled:
+            pooled[key].append(r[key][skip:])
+    return pooled
+
+
 def run(method, total_ps, step_fs, temperature, seed, log):
     """Sample kinetic temperature, per-molecule translational/rotational KE and intermolecular C-C distances."""
     model = mrattle.models.benzeneCluster(temperature=temperature * unit.kelvin, seed=seed)
@@ -41,47 +56,59 @@ def run(method, total_ps, step_fs, temperature, seed, log):
         d = np.sqrt(((c[:, None, :] - c[None, :, :]) ** 2).sum(-1))
         other = mol[:, None] < mol[None, :]
         cc.append(d[other])
-        if k % max(1, frames // 10) == 0:
-            log("  sampling %-9s %5.1f%%  T=%.1f K" % (method, 100.0 * k / frames, temps[-1]))
+        if k % max(1, frames // 4) == 0:
+            log("  sampling %-9s seed %d %5.1f%%  T=%.1f K" % (method, seed, 100.0 * k / frames, temps[-1]))
     return {"temperature": np.array(temps), "translational": np.array(trans), "rotational": np.array(rot),
             "cc": np.array(cc), "frame_ps": stride * step_fs * common.FS}
 
 
-def compare(results, equilibrate_ps):
-    """Means, decorrelated KS tests, equipartition ratio per method."""
+def _decorrelated(runs):
+    """Each run's series thinned to roughly independent samples, then pooled."""
+    return np.concatenate([stats.decorrelate(r) for r in runs])
+
+
+def compare(results):
+    """Means, KS tests on decorrelated pooled samples, and equipartition per method."""
     rows = []
-    skip = {m: int(round(equilibrate_ps / r["frame_ps"])) for m, r in results.items()}
     for name in ("temperature", "translational", "rotational"):
-        a = results["M-RATTLE"][name][skip["M-RATTLE"]:]
-        b = results["splitting"][name][skip["splitting"]:]
-        d, p = stats.ks_two_sample(stats.decorrelate(a), stats.decorrelate(b))
-        rows.append({"quantity": name, "M-RATTLE mean": float(a.mean()), "splitting mean": float(b.mean()),
-                     "KS D": d, "KS p": p, "independent samples": (len(stats.decorrelate(a)), len(stats.decorrelate(b)))})
-    # C-C distances: compare the per-frame fraction of pairs within the first peak (< 0.6 nm),
-    # a scalar series that can be decorrelated, plus the pooled histograms for the plot.
-    first_shell = {m: (r["cc"][skip[m]:] < 0.6).mean(1) for m, r in results.items()}
-    d, p = stats.ks_two_sample(stats.decorrelate(first_shell["M-RATTLE"]), stats.decorrelate(first_shell["splitting"]))
-    rows.append({"quantity": "C-C pairs < 0.6 nm (fraction)", "M-RATTLE mean": float(first_shell["M-RATTLE"].mean()),
-                 "splitting mean": float(first_shell["splitting"].mean()), "KS D": d, "KS p": p,
-                 "independent samples": (len(stats.decorrelate(first_shell["M-RATTLE"])),
-                                         len(stats.decorrelate(first_shell["splitting"])))})
+        a = _decorrelated(results["M-RATTLE"][name])
+        b = _decorrelated(results["splitting"][name])
+        d, p = stats.ks_two_sample(a, b)
+        rows.append({"quantity": name, "M-RATTLE mean": float(np.concatenate(results["M-RATTLE"][name]).mean()),
+                     "splitting mean": float(np.concatenate(results["splitting"][name]).mean()),
+                     "KS D": d, "KS p": p, "independent samples": (len(a), len(b))})
+    # C-C distances: the per-frame fraction of pairs within the first peak (< 0.6 nm), a
+    # scalar series that can be decorrelated; the pooled histograms are in the plot.
+    shell = {m: [(c < 0.6).mean(1) for c in r["cc"]] for m, r in results.items()}
+    a, b = _decorrelated(shell["M-RATTLE"]), _decorrelated(shell["splitting"])
+    d, p = stats.ks_two_sample(a, b)
+    rows.append({"quantity": "C-C pairs < 0.6 nm (fraction)",
+                 "M-RATTLE mean": float(np.concatenate(shell["M-RATTLE"]).mean()),
+                 "splitting mean": float(np.concatenate(shell["splitting"]).mean()),
+                 "KS D": d, "KS p": p, "independent samples": (len(a), len(b))})
+    # Equipartition: rotational over translational kinetic energy per molecule (both 3 DOF).
+    for method, r in results.items():
+        ratio = np.concatenate(r["rotational"]).mean() / np.concatenate(r["translational"]).mean()
+        rows.append({"quantity": "equipartition: rotational / translational KE (%s)" % method,
+                     "M-RATTLE mean": float(ratio) if method == "M-RATTLE" else "",
+                     "splitting mean": float(ratio) if method == "splitting" else "",
+                     "KS D": "", "KS p": "", "independent samples": ""})
     return rows
 
 
-def plot(results, equilibrate_ps, path):
+def plot(results, path):
     import matplotlib
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
     fig, axes = plt.subplots(1, 3, figsize=(15, 4.2))
     for method, r in results.items():
-        skip = int(round(equilibrate_ps / r["frame_ps"]))
-        axes[0].hist(r["temperature"][skip:], bins=30, density=True, histtype="step", lw=1.5, label=method)
-        axes[1].hist(r["translational"][skip:] / KB, bins=30, density=True, histtype="step", lw=1.5,
+        axes[0].hist(np.concatenate(r["temperature"]), bins=30, density=True, histtype="step", lw=1.5, label=method)
+        axes[1].hist(np.concatenate(r["translational"]) / KB, bins=30, density=True, histtype="step", lw=1.5,
                      label=method + " translational")
-        axes[1].hist(r["rotational"][skip:] / KB, bins=30, density=True, histtype="step", lw=1.5, ls="--",
+        axes[1].hist(np.concatenate(r["rotational"]) / KB, bins=30, density=True, histtype="step", lw=1.5, ls="--",
                      label=method + " rotational")
-        axes[2].hist(r["cc"][skip:].ravel(), bins=120, range=(0.3, 1.5), density=True, histtype="step", lw=1.2,
-                     label=method)
+        axes[2].hist(np.concatenate([c.ravel() for c in r["cc"]]), bins=120, range=(0.3, 1.5), density=True,
+                     histtype="step", lw=1.2, label=method)
     axes[0].set_xlabel("kinetic temperature (K), rigid-body DOF")
     axes[1].set_xlabel("mean KE per molecule / k_B (K); equipartition: equal")
     axes[2].set_xlabel("intermolecular C-C distance (nm)")
