@@ -191,8 +191,11 @@ vector<std::string> RigidBodyIntegrator::getKernelNames() {
 }
 
 void RigidBodyIntegrator::stateChanged(State::DataType changed) {
+    // Changes the integrator makes itself (inProjection) are handled where it makes them.
+    if (inProjection)
+        return;
     forcesAreValid = false;
-    if (context == nullptr || inProjection)
+    if (context == nullptr)
         return;
     if (changed == State::Positions) {
         vector<Vec3> positions;
@@ -322,7 +325,8 @@ void RigidBodyIntegrator::refreshForceCaches() {
     vector<Vec3> shifted(positions);
     for (Vec3& position : shifted)
         position += shift;
-    inProjection = true;  // these position changes are not the user's
+    forcesAreValid = false;  // the Context's forces will be the shifted copy's until computeForces()
+    inProjection = true;     // these position changes are not the user's
     try {
         context->setPositions(shifted);
         context->calcForcesAndEnergy(true, false, getIntegrationForceGroups());
@@ -483,8 +487,12 @@ void RigidBodyIntegrator::thermalizeCollidedBodies() {
         }
         changed = true;
     }
-    if (changed)
+    if (changed) {
+        // The integrator's own change: it leaves forces valid, and the caller projects.
+        inProjection = true;
         context->setVelocities(velocities);
+        inProjection = false;
+    }
 }
 
 void RigidBodyIntegrator::ensureForces() {
