@@ -283,16 +283,18 @@ def sampling_section(rows, runs, per_run, eq, step, quick):
               "difference). Equipartition: with 3 translational and 3 rotational degrees of freedom per molecule, "
               "the mean rotational and translational kinetic energies should be equal.\n" % (runs, step, per_run, eq))
     md.append(table(rows, [("quantity", "quantity"), ("M-RATTLE mean", "M-RATTLE mean"),
-                           ("splitting mean", "splitting mean"), ("KS D", "KS D"), ("KS p", "KS p"),
+                           ("splitting mean", "splitting mean"),
+                           ("spread of run means", lambda r: r.get("spread of run means", "")),
+                           ("KS D", "KS D"), ("KS p", "KS p"),
                            ("independent samples", "independent samples")],
-                    {"M-RATTLE mean": "%.4g", "splitting mean": "%.4g", "KS D": "%.3f", "KS p": "%.3f"}))
+                    {"M-RATTLE mean": "%.4g", "splitting mean": "%.4g", "spread of run means": "%.3g",
+                     "KS D": "%.3f", "KS p": "%.3f"}))
     md.append("Means are over all frames after equilibration (kelvin for temperature, kJ/mol per molecule for "
               "kinetic energies). Caveat: a small cluster in vacuum can lose a molecule, and runs started from "
               "different seeds settle at different temperatures; frames are decorrelated within a run but runs "
               "differ from each other, so pooled KS p-values overstate significance for slowly varying quantities "
-              "(the C-C shell fraction most of all). Both methods are second order and conserve energy equally "
-              "well (accuracy section); differences that remain at this sample size are within what single "
-              "runs vary by.\n")
+              "(the C-C shell fraction most of all): compare the difference between the methods' means with the "
+              "spread of the per-run means (standard deviation over all runs of both methods).\n")
     md.append("![sampling](results/sampling_histograms.png)\n")
     return md
 

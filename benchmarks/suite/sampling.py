@@ -67,6 +67,13 @@ def _decorrelated(runs):
     return np.concatenate([stats.decorrelate(r) for r in runs])
 
 
+def _run_spread(results, name):
+    """Standard deviation of the per-run means, over every run of both methods: how much one
+    run's mean varies, against which the difference between the methods' means is judged."""
+    means = [r.mean() for method in results.values() for r in method[name]]
+    return float(np.std(means, ddof=1)) if len(means) > 1 else float("nan")
+
+
 def compare(results):
     """Means, KS tests on decorrelated pooled samples, and equipartition per method."""
     rows = []
@@ -76,6 +83,7 @@ def compare(results):
         d, p = stats.ks_two_sample(a, b)
         rows.append({"quantity": name, "M-RATTLE mean": float(np.concatenate(results["M-RATTLE"][name]).mean()),
                      "splitting mean": float(np.concatenate(results["splitting"][name]).mean()),
+                     "spread of run means": _run_spread(results, name),
                      "KS D": d, "KS p": p, "independent samples": (len(a), len(b))})
     # C-C distances: the per-frame fraction of pairs within the first peak (< 0.6 nm), a
     # scalar series that can be decorrelated; the pooled histograms are in the plot.
@@ -85,6 +93,7 @@ def compare(results):
     rows.append({"quantity": "C-C pairs < 0.6 nm (fraction)",
                  "M-RATTLE mean": float(np.concatenate(shell["M-RATTLE"]).mean()),
                  "splitting mean": float(np.concatenate(shell["splitting"]).mean()),
+                 "spread of run means": _run_spread({m: {"shell": v} for m, v in shell.items()}, "shell"),
                  "KS D": d, "KS p": p, "independent samples": (len(a), len(b))})
     # Equipartition: rotational over translational kinetic energy per molecule (both 3 DOF).
     for method, r in results.items():
