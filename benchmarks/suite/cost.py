@@ -41,7 +41,7 @@ def plot(timings, path):
             pts = sorted((int(r["bodies"]), float(r[key_time])) for r in rows if r["integrator"] == integrator)
             ax.loglog([p[0] for p in pts], [p[1] for p in pts], "o-", label=integrator)
         ax.set_xlabel("number of rigid bodies (k = %d atoms each)" % atoms_for_n)
-        ax.set_ylabel("time per step (%s)" % key_time.split("_")[-1])
+        ax.set_ylabel("time per step (microseconds, median)")
         ax.set_title(platform)
         ax.legend(fontsize=8)
     fig.tight_layout()
