@@ -14,17 +14,6 @@ using std::vector;
 
 namespace {
 
-/** The message of the OpenMMException that action throws ("" and a test failure if none). */
-string messageOf(const std::function<void()>& action) {
-    try {
-        action();
-    } catch (const OpenMMException& e) {
-        return e.what();
-    }
-    ADD_FAILURE() << "no OpenMMException was thrown";
-    return "";
-}
-
 /** Six particles: two bonded pairs and two free atoms, particle 4 massless. */
 System* smallSystem() {
     System* system = new System();

@@ -288,15 +288,10 @@ namespace {
 void expectRefusedAndUnchanged(TestRun& run, const string& badCheckpoint, const vector<string>& phrases) {
     string good = checkpointOf(*run.context);
     Snapshot before = snapshot(*run.context);
-    try {
-        loadCheckpoint(*run.context, badCheckpoint);
-        ADD_FAILURE() << "loadCheckpoint accepted a bad checkpoint";
-    } catch (const OpenMMException& e) {
-        string message = e.what();
-        for (const string& phrase : phrases)
-            EXPECT_NE(string::npos, message.find(phrase)) << "'" << phrase << "' not in: " << message;
-        EXPECT_NE(string::npos, message.find("left as it was")) << message;
-    }
+    string message = messageOf([&] { loadCheckpoint(*run.context, badCheckpoint); });
+    for (const string& phrase : phrases)
+        EXPECT_NE(string::npos, message.find(phrase)) << "'" << phrase << "' not in: " << message;
+    EXPECT_NE(string::npos, message.find("left as it was")) << message;
     expectSameState(before, snapshot(*run.context));
     run.integrator->step(10);
     Snapshot afterRefusal = snapshot(*run.context);

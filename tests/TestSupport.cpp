@@ -1,4 +1,5 @@
 #include "TestSupport.h"
+#include <gtest/gtest.h>
 #include "openmm/OpenMMException.h"
 #include <cmath>
 #include <mutex>
@@ -221,6 +222,16 @@ Vec3 angularMomentum(const vector<double>& masses, const vector<Vec3>& positions
     for (size_t i = 0; i < velocities.size(); i++)
         l += positions[i].cross(velocities[i]) * masses[i];
     return l;
+}
+
+std::string messageOf(const std::function<void()>& action) {
+    try {
+        action();
+    } catch (const OpenMMException& e) {
+        return e.what();
+    }
+    ADD_FAILURE() << "no OpenMMException was thrown";
+    return "";
 }
 
 double maxDistanceChange(const vector<Vec3>& a, const vector<Vec3>& b, const vector<vector<int> >& bodies) {

@@ -4,6 +4,7 @@
 #include "MRattleIntegrator.h"
 #include "OpenMM.h"
 #include <map>
+#include <functional>
 #include <memory>
 #include <string>
 #include <vector>
@@ -92,6 +93,9 @@ OpenMM::Vec3 totalMomentum(const std::vector<double>& masses, const std::vector<
 /** Total angular momentum sum m_i x_i x v_i about the origin (space frame). */
 OpenMM::Vec3 angularMomentum(const std::vector<double>& masses, const std::vector<OpenMM::Vec3>& positions,
                              const std::vector<OpenMM::Vec3>& velocities);
+
+/** The message of the OpenMMException that action throws ("" and a test failure if none). */
+std::string messageOf(const std::function<void()>& action);
 
 /** Largest change of any intra-body distance between two configurations. */
 double maxDistanceChange(const std::vector<OpenMM::Vec3>& a, const std::vector<OpenMM::Vec3>& b,
