@@ -23,6 +23,7 @@
  * (default stderr) as CSV. Exit status 2 if any run diverged (non-finite state).
  */
 #include "BenchmarkShapes.h"
+#include "MRattleBuildInfo.h"
 #include "MRattleIntegrator.h"
 #include "OpenMM.h"
 #include "RigidSplittingIntegrator.h"
@@ -226,6 +227,8 @@ int main(int argc, char** argv) {
     try {
         Options options = parse(argc, argv);
         bool allFinite = true;
+        // The platform plugins of the OpenMM this was built against, unless the user names others.
+        setenv("OPENMM_PLUGIN_DIR", MRATTLE_OPENMM_PLUGIN_DIR, 0);
         Platform::loadPluginsFromDirectory(Platform::getDefaultPluginsDirectory());
         registerMRattleReferenceKernelFactories();
         std::ofstream outFile, ratioFile;

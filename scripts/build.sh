@@ -6,6 +6,6 @@ root="$(cd "$(dirname "$0")/.." && pwd)"
 build="${MRATTLE_BUILD_DIR:-$root/build}"
 mkdir -p "$build"
 log="$build/configure.log"
-cmake -S "$root" -B "$build" -DCMAKE_BUILD_TYPE=Release -DPython3_EXECUTABLE=/usr/bin/python3 > "$log" 2>&1 || {
+cmake -S "$root" -B "$build" -DCMAKE_BUILD_TYPE=Release > "$log" 2>&1 || {
     cat "$log"; exit 1; }
 cmake --build "$build" -j"$(nproc)"

@@ -6,4 +6,6 @@ set -euo pipefail
 root="$(cd "$(dirname "$0")/.." && pwd)"
 "$root/scripts/build.sh"
 build="${MRATTLE_BUILD_DIR:-$root/build}"
-PYTHONPATH="$build/python${PYTHONPATH:+:$PYTHONPATH}" /usr/bin/python3 "$root/examples/benzene_cluster.py" "$@"
+# The interpreter CMake chose: the one that has openmm.
+python="$(sed -n 's/^Python3_EXECUTABLE:[A-Z]*=//p' "$build/CMakeCache.txt")"
+PYTHONPATH="$build/python${PYTHONPATH:+:$PYTHONPATH}" "${python:-/usr/bin/python3}" "$root/examples/benzene_cluster.py" "$@"

@@ -1,7 +1,9 @@
 #include "TestSupport.h"
+#include "MRattleBuildInfo.h"
 #include <gtest/gtest.h>
 #include "openmm/OpenMMException.h"
 #include <cmath>
+#include <cstdlib>
 #include <mutex>
 #include <random>
 
@@ -15,6 +17,8 @@ namespace MRattleTest {
 void loadPlugins() {
     static std::once_flag once;
     std::call_once(once, [] {
+        // The platform plugins of the OpenMM this was built against, unless the user names others.
+        setenv("OPENMM_PLUGIN_DIR", MRATTLE_OPENMM_PLUGIN_DIR, 0);
         Platform::loadPluginsFromDirectory(Platform::getDefaultPluginsDirectory());
         registerMRattleReferenceKernelFactories();
     });

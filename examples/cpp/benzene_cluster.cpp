@@ -8,6 +8,7 @@
  *
  *     benzene_cluster [steps=5000] [step size in fs=2] [platform=CPU]
  */
+#include "MRattleBuildInfo.h"
 #include "MRattleIntegrator.h"
 #include "OpenMM.h"
 #include <chrono>
@@ -113,6 +114,8 @@ int main(int argc, char* argv[]) {
         return 2;
     }
     try {
+        // The platform plugins of the OpenMM this was built against, unless the user names others.
+        setenv("OPENMM_PLUGIN_DIR", MRATTLE_OPENMM_PLUGIN_DIR, 0);
         Platform::loadPluginsFromDirectory(Platform::getDefaultPluginsDirectory());
         registerMRattleReferenceKernelFactories();
 

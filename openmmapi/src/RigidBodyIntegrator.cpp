@@ -1,4 +1,5 @@
 #include "RigidBodyIntegrator.h"
+#include "internal/OpenMMVersionCheck.h"
 #include "internal/RigidBodyKernels.h"
 #include "openmm/AndersenThermostat.h"
 #include "openmm/Context.h"
@@ -160,6 +161,7 @@ int RigidBodyIntegrator::getNumDegreesOfFreedom() const {
 void RigidBodyIntegrator::initialize(ContextImpl& contextRef) {
     if (owner != nullptr && &contextRef.getOwner() != owner)
         throw OpenMMException("This Integrator is already bound to a context");
+    checkOpenMMVersion(Platform::getOpenMMVersion());
     const System& system = contextRef.getSystem();
     bodySet = RigidBodySet(system, declaredBodies, contextRef.getMolecules());
     hasVelocityChangingForce = false;

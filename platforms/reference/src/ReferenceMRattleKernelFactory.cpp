@@ -1,6 +1,7 @@
 #include "ReferenceMRattleKernelFactory.h"
 #include "ReferenceMRattleKernels.h"
 #include "ReferenceRigidSplittingKernels.h"
+#include "internal/OpenMMVersionCheck.h"
 #include "openmm/OpenMMException.h"
 #include "openmm/Platform.h"
 #include "openmm/internal/windowsExport.h"
@@ -22,6 +23,7 @@ extern "C" OPENMM_EXPORT void registerPlatforms() {
 
 /** OpenMM's plugin entry point: register the kernels on every Reference-derived platform present. */
 extern "C" OPENMM_EXPORT void registerKernelFactories() {
+    checkOpenMMVersion(Platform::getOpenMMVersion());
     for (int i = 0; i < Platform::getNumPlatforms(); i++) {
         Platform& platform = Platform::getPlatform(i);
         if (platform.getName() == "Reference" || platform.getName() == "CPU") {

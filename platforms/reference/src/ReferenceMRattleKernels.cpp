@@ -1,6 +1,6 @@
 #include "ReferenceMRattleKernels.h"
 #include "openmm/OpenMMException.h"
-#include "openmm/reference/ReferenceVirtualSites.h"
+#include "openmm/internal/ContextImpl.h"
 
 using namespace MRattlePlugin;
 using namespace OpenMM;
@@ -42,5 +42,5 @@ void ReferenceIntegrateMRattleStepKernel::integratePositions(ContextImpl& contex
     }
     x.swap(newPositions);
     v.swap(newVelocities);
-    ReferenceVirtualSites::computePositions(dynamics->system(), x);
+    context.computeVirtualSites();  // OpenMM 7.7 and 8.x alike
 }

@@ -1,6 +1,6 @@
 #include "ReferenceRigidSplittingKernels.h"
 #include "mrattle/RigidBodyRotor.h"
-#include "openmm/reference/ReferenceVirtualSites.h"
+#include "openmm/internal/ContextImpl.h"
 
 using namespace MRattlePlugin;
 using namespace OpenMM;
@@ -31,5 +31,5 @@ void ReferenceIntegrateRigidSplittingStepKernel::integratePositions(ContextImpl&
             x[i] = newPositions[i];
         }
     }
-    ReferenceVirtualSites::computePositions(dynamics->system(), x);
+    context.computeVirtualSites();  // OpenMM 7.7 and 8.x alike
 }
