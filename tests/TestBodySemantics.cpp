@@ -218,8 +218,8 @@ TEST(BodySemantics, MoleculesAreBodiesInAutomaticMode) {
     EXPECT_TRUE(integrator.isBodyLinear(2));
     // A constrained free pair (3 + 3 - 1) and a linear body (5) have the same count.
     EXPECT_EQ(2 * 6 + 5 + 4 * 3, integrator.getNumDegreesOfFreedom());
-    EXPECT_EQ(0, integrator.getRigidBodySet().getFreeConstraints().size());
-    EXPECT_EQ(1, integrator.getRigidBodySet().getNumIgnoredConstraints());
+    EXPECT_EQ(0, integrator.getTopology().getFreeConstraints().size());
+    EXPECT_EQ(1, integrator.getTopology().getNumIgnoredConstraints());
 }
 
 TEST(BodySemantics, LinearBodyStaysLinearWithoutSpin) {
@@ -336,7 +336,7 @@ TEST(BodySemantics, ConstraintsInsideBodiesAreIgnored) {
     MRattleIntegrator a(0.002), b(0.002);
     Context plainContext(*plain.system, a, platform("Reference"));
     Context constrainedContext(*constrained.system, b, platform("Reference"));
-    EXPECT_EQ(80, b.getRigidBodySet().getNumIgnoredConstraints());
+    EXPECT_EQ(80, b.getTopology().getNumIgnoredConstraints());
     EXPECT_EQ(a.getNumDegreesOfFreedom(), b.getNumDegreesOfFreedom());
     EXPECT_EQ(a.getBodiesInEffect(), b.getBodiesInEffect());
     plainContext.setPositions(plain.positions);

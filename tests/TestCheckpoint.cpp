@@ -1,10 +1,16 @@
 /*
- * Checkpoints and saved states of the rigid-body integrators: a run continued from a
- * checkpoint (same Context, a new Context, Context::reinitialize) is bit for bit the
- * uninterrupted run on Reference and on CPU with one thread; a checkpoint that does not
- * fit (other bodies, other integrator, unknown format, truncated) is refused with a clear
- * OpenMMException and leaves the Context as it was; a State saved as XML continues with
- * the bodies rigid and the shapes they had.
+ * Checkpoints and saved states, for every platform and rigid-body integrator (a
+ * value-parameterised suite over allConfigs()):
+ * - a run continued from a checkpoint (same Context, a new Context, Context::reinitialize)
+ *   is bit for bit the uninterrupted run on Reference, and on CPU with one thread when no
+ *   cutoff is used; with a cutoff the CPU platform's neighbour list, built at other steps,
+ *   makes them differ at round-off, as it does for OpenMM's VerletIntegrator;
+ * - a checkpoint that does not fit (other bodies, another integrator, unknown format,
+ *   truncated, damaged) is refused with an OpenMMException that says what differs, and
+ *   the Context then refuses to step until positions and velocities are set again;
+ * - setState() and setVelocities() give rigid velocities back bit for bit;
+ * - stepping writes no Context checkpoint, whatever global parameters a refused
+ *   checkpoint left behind.
  */
 #include "RigidSplittingIntegrator.h"
 #include "TestSupport.h"
@@ -46,8 +52,8 @@ Vec3 orient(const Vec3& v, double a, double b) {
 
 /**
  * A periodic cluster of 3x3x3 rigid molecules (benzene and linear triatomics
- * alternating) with Lennard-Jones and reaction-field Coulomb interactions, cut off at
- * 0.8 nm; bonds make each molecule one OpenMM molecule (so one body by default).
+ * alternating) with Lennard-Jones and Coulomb interactions (reaction field cut off at 0.8 nm
+ * with WithCutoff); bonds make each molecule one OpenMM molecule (so one body by default).
  */
 struct MixedCluster {
     System system;
@@ -55,15 +61,16 @@ struct MixedCluster {
     vector<vector<int> > molecules;
 };
 
-enum Extras { NoExtras = 0, WithThermostat = 1, WithMotionRemover = 2 };
+enum Extras { NoExtras = 0, WithThermostat = 1, WithMotionRemover = 2, WithCutoff = 4 };
 
+/** Without WithCutoff, the same molecules with no cutoff: the CPU platform then keeps no neighbour list. */
 MixedCluster mixedCluster(int extras = NoExtras) {
     MixedCluster c;
     const int n = 3;
     const double spacing = 0.65, box = n * spacing;
     c.system.setDefaultPeriodicBoxVectors(Vec3(box, 0, 0), Vec3(0, box, 0), Vec3(0, 0, box));
     NonbondedForce* nonbonded = new NonbondedForce();
-    nonbonded->setNonbondedMethod(NonbondedForce::CutoffPeriodic);
+    nonbonded->setNonbondedMethod((extras & WithCutoff) ? NonbondedForce::CutoffPeriodic : NonbondedForce::NoCutoff);
     nonbonded->setCutoffDistance(0.8);
     HarmonicBondForce* bonds = new HarmonicBondForce();
     int k = 0;
@@ -92,12 +99,6 @@ MixedCluster mixedCluster(int extras = NoExtras) {
     if (extras & WithMotionRemover)
         c.system.addForce(new CMMotionRemover(3));
     return c;
-}
-
-std::map<string, string> platformProperties(const string& name) {
-    if (name == "CPU")
-        return {{"Threads", "1"}};
-    return {};
 }
 
 /** Everything a checkpoint restores, as the Context reports it. */
@@ -170,15 +171,16 @@ struct TestRun {
     std::unique_ptr<RigidBodyIntegrator> integrator;
     std::unique_ptr<Context> context;
 
-    TestRun(const string& platformName, int extras = NoExtras, bool splitting = false,
-        const vector<vector<int> >& bodies = {}) : cluster(mixedCluster(extras)) {
-        if (splitting)
-            integrator.reset(new RigidSplittingIntegrator(0.002));
-        else
-            integrator.reset(new MRattleIntegrator(0.002));
+    TestRun(const Config& config, int extras = NoExtras, const vector<vector<int> >& bodies = {})
+        : TestRun(config, makeIntegrator(config.integrator, 0.002), extras, bodies) {
+    }
+    TestRun(const Config& config, std::unique_ptr<RigidBodyIntegrator> integratorToUse, int extras = NoExtras,
+            const vector<vector<int> >& bodies = {})
+        : cluster(mixedCluster(extras)), integrator(std::move(integratorToUse)) {
         for (const auto& body : bodies)
             integrator->addRigidBody(body);
-        context.reset(new Context(cluster.system, *integrator, platform(platformName), platformProperties(platformName)));
+        context.reset(new Context(cluster.system, *integrator, platform(config.platform),
+                                  platformProperties(config.platform)));
         context->setPositions(cluster.positions);
         context->setVelocitiesToTemperature(300, 7);
     }
@@ -187,8 +189,8 @@ struct TestRun {
 /** Steps before the checkpoint and after it. */
 const int StepsBefore = 40, StepsAfter = 60;
 
-void continuedRunMatchesUninterrupted(const string& platformName, int extras, bool splitting) {
-    TestRun run(platformName, extras, splitting);
+/** Largest coordinate difference between a continued run and the uninterrupted one. */
+double continuedRunDifference(TestRun& run, bool expectBitwise) {
     run.integrator->step(StepsBefore);
     string checkpoint = checkpointOf(*run.context);
     run.integrator->step(StepsAfter);
@@ -197,104 +199,111 @@ void continuedRunMatchesUninterrupted(const string& platformName, int extras, bo
 
     loadCheckpoint(*run.context, checkpoint);
     run.integrator->step(StepsAfter);
-    expectSameState(uninterrupted, snapshot(*run.context));
-    EXPECT_TRUE(sameBits(energy, run.context->getState(State::Energy).getPotentialEnergy()));
+    Snapshot continued = snapshot(*run.context);
+    if (expectBitwise) {
+        expectSameState(uninterrupted, continued);
+        EXPECT_TRUE(sameBits(energy, run.context->getState(State::Energy).getPotentialEnergy()));
+    }
     // The run really moved: the test compares trajectories, not a frozen state.
     EXPECT_EQ(StepsBefore + StepsAfter, uninterrupted.stepCount);
     EXPECT_GT(std::fabs(uninterrupted.positions[0][0] - run.cluster.positions[0][0]), 1e-4);
+    return maxDeviation(uninterrupted.positions, continued.positions);
 }
 
-void newContextMatchesUninterrupted(const string& platformName, int extras, bool splitting) {
-    TestRun run(platformName, extras, splitting);
-    run.integrator->step(StepsBefore);
-    string checkpoint = checkpointOf(*run.context);
-    run.integrator->step(StepsAfter);
-    Snapshot uninterrupted = snapshot(*run.context);
-    run.context.reset();
-
-    // A restart as in a new process: a new System, integrator and Context.
-    MixedCluster cluster = mixedCluster(extras);
-    std::unique_ptr<RigidBodyIntegrator> integrator;
-    if (splitting)
-        integrator.reset(new RigidSplittingIntegrator(0.002));
-    else
-        integrator.reset(new MRattleIntegrator(0.002));
-    Context context(cluster.system, *integrator, platform(platformName), platformProperties(platformName));
-    loadCheckpoint(context, checkpoint);
-    integrator->step(StepsAfter);
-    expectSameState(uninterrupted, snapshot(context));
-}
+class Checkpoint : public RigidBodyTest {};
+class SavedState : public RigidBodyTest {};
 
 } // namespace
 
-TEST(Checkpoint, ContinuedRunIsBitwiseIdenticalOnReference) {
-    continuedRunMatchesUninterrupted("Reference", NoExtras, false);
+TEST_P(Checkpoint, ContinuedRunIsBitwiseIdentical) {
+    TestRun run(GetParam());
+    continuedRunDifference(run, true);
 }
 
-TEST(Checkpoint, ContinuedRunIsBitwiseIdenticalOnCpuWithOneThread) {
-    continuedRunMatchesUninterrupted("CPU", NoExtras, false);
+TEST_P(Checkpoint, ContinuedRunWithThermostatAndMotionRemoverIsBitwiseIdentical) {
+    // The Andersen thermostat draws random numbers, OpenMM's and the kernel's (which
+    // re-draws whole bodies): the checkpoint restores both.
+    TestRun run(GetParam(), WithThermostat | WithMotionRemover);
+    continuedRunDifference(run, true);
 }
 
-TEST(Checkpoint, ContinuedRunWithThermostatAndMotionRemoverIsBitwiseIdentical) {
-    // The Andersen thermostat draws random numbers: the checkpoint restores the generator too.
-    continuedRunMatchesUninterrupted("Reference", WithThermostat | WithMotionRemover, false);
-    continuedRunMatchesUninterrupted("CPU", WithThermostat | WithMotionRemover, false);
-}
-
-TEST(Checkpoint, RigidSplittingContinuedRunIsBitwiseIdentical) {
-    continuedRunMatchesUninterrupted("Reference", NoExtras, true);
-    continuedRunMatchesUninterrupted("CPU", NoExtras, true);
-}
-
-TEST(Checkpoint, RestartInNewContextIsBitwiseIdenticalOnReference) {
-    newContextMatchesUninterrupted("Reference", NoExtras, false);
-    newContextMatchesUninterrupted("Reference", WithThermostat, false);
-}
-
-TEST(Checkpoint, RestartInNewContextIsBitwiseIdenticalOnCpuWithOneThread) {
-    newContextMatchesUninterrupted("CPU", NoExtras, false);
-}
-
-TEST(Checkpoint, ReinitializePreservingStateContinuesTheRun) {
-    // Context::reinitialize(true) goes through a checkpoint: it continues the run that
-    // wrote a checkpoint at that step (on Reference, also the run that wrote none).
-    for (const string platformName : {"Reference", "CPU"}) {
-        TestRun uninterrupted(platformName), reinitialized(platformName);
-        uninterrupted.integrator->step(StepsBefore);
-        checkpointOf(*uninterrupted.context);
-        uninterrupted.integrator->step(StepsAfter);
-        reinitialized.integrator->step(StepsBefore);
-        reinitialized.context->reinitialize(true);
-        EXPECT_EQ(StepsBefore, reinitialized.context->getState(State::Positions).getStepCount());
-        reinitialized.integrator->step(StepsAfter);
-        expectSameState(snapshot(*uninterrupted.context), snapshot(*reinitialized.context));
-        EXPECT_EQ(uninterrupted.integrator->getNumDegreesOfFreedom(), reinitialized.integrator->getNumDegreesOfFreedom());
+TEST_P(Checkpoint, WithACutoffOnlyTheCpuNeighbourListMakesRestartsDiffer) {
+    TestRun run(GetParam(), WithCutoff);
+    const bool cpu = GetParam().platform == "CPU";
+    double difference = continuedRunDifference(run, !cpu);
+    if (cpu) {
+        // OpenMM's own VerletIntegrator on the same System and platform, for comparison.
+        MixedCluster cluster = mixedCluster(WithCutoff);
+        VerletIntegrator verlet(0.002);
+        Context context(cluster.system, verlet, platform("CPU"), platformProperties("CPU"));
+        context.setState(run.context->getState(State::Positions | State::Velocities));
+        verlet.step(StepsBefore);
+        string checkpoint = checkpointOf(context);
+        verlet.step(StepsAfter);
+        vector<Vec3> uninterrupted = context.getState(State::Positions).getPositions();
+        loadCheckpoint(context, checkpoint);
+        verlet.step(StepsAfter);
+        double verletDifference = maxDeviation(uninterrupted, context.getState(State::Positions).getPositions());
+        std::cout << "CPU, cutoff 0.8 nm, " << StepsAfter << " steps after a checkpoint: continued run differs by "
+                  << difference << " nm (VerletIntegrator: " << verletDifference << " nm)" << std::endl;
+        EXPECT_LT(difference, 1e-5);
     }
-    TestRun withoutCheckpoint("Reference"), reinitialized("Reference");
-    withoutCheckpoint.integrator->step(StepsBefore + StepsAfter);
+}
+
+TEST_P(Checkpoint, RestartInNewContextIsBitwiseIdentical) {
+    for (int extras : {NoExtras, WithThermostat}) {
+        TestRun run(GetParam(), extras);
+        run.integrator->step(StepsBefore);
+        string checkpoint = checkpointOf(*run.context);
+        run.integrator->step(StepsAfter);
+        Snapshot uninterrupted = snapshot(*run.context);
+        run.context.reset();
+
+        // A restart as in a new process: a new System, integrator and Context.
+        MixedCluster cluster = mixedCluster(extras);
+        std::unique_ptr<RigidBodyIntegrator> integrator = makeIntegrator(0.002);
+        std::unique_ptr<Context> context = makeContext(cluster.system, *integrator);
+        loadCheckpoint(*context, checkpoint);
+        integrator->step(StepsAfter);
+        expectSameState(uninterrupted, snapshot(*context));
+    }
+}
+
+TEST_P(Checkpoint, ReinitializePreservingStateContinuesTheRun) {
+    // Context::reinitialize(true) goes through a checkpoint.
+    TestRun uninterrupted(GetParam()), reinitialized(GetParam());
+    uninterrupted.integrator->step(StepsBefore + StepsAfter);
     reinitialized.integrator->step(StepsBefore);
     reinitialized.context->reinitialize(true);
+    EXPECT_EQ(StepsBefore, reinitialized.context->getState(State::Positions).getStepCount());
     reinitialized.integrator->step(StepsAfter);
-    expectSameState(snapshot(*withoutCheckpoint.context), snapshot(*reinitialized.context));
+    expectSameState(snapshot(*uninterrupted.context), snapshot(*reinitialized.context));
+    EXPECT_EQ(uninterrupted.integrator->getNumDegreesOfFreedom(), reinitialized.integrator->getNumDegreesOfFreedom());
 }
 
 namespace {
 
 /**
- * Loading a bad checkpoint throws an OpenMMException whose message contains each of
- * the expected phrases, and leaves the Context exactly as it was: same state, and the
- * same trajectory afterwards as a run that never tried.
+ * Loading a bad checkpoint throws an OpenMMException whose message contains each of the
+ * expected phrases and says what to do; stepping is refused until positions and
+ * velocities are set again, after which the run is the one a good checkpoint gives.
  */
-void expectRefusedAndUnchanged(TestRun& run, const string& badCheckpoint, const vector<string>& phrases) {
+void expectRefusedUntilStateIsSet(TestRun& run, const string& badCheckpoint, const vector<string>& phrases) {
     string good = checkpointOf(*run.context);
-    Snapshot before = snapshot(*run.context);
+    State saved = run.context->getState(State::Positions | State::Velocities | State::Parameters);
     string message = messageOf([&] { loadCheckpoint(*run.context, badCheckpoint); });
     for (const string& phrase : phrases)
         EXPECT_NE(string::npos, message.find(phrase)) << "'" << phrase << "' not in: " << message;
-    EXPECT_NE(string::npos, message.find("left as it was")) << message;
-    expectSameState(before, snapshot(*run.context));
+    EXPECT_NE(string::npos, message.find("set positions and velocities again")) << message;
+
+    string refusal = messageOf([&] { run.integrator->step(1); });
+    EXPECT_NE(string::npos, refusal.find("loadCheckpoint() was refused")) << refusal;
+    run.context->setPositions(saved.getPositions());
+    EXPECT_THROW(run.integrator->step(1), OpenMMException) << "stepped with the checkpoint's velocities";
+    run.context->setState(saved);
     run.integrator->step(10);
     Snapshot afterRefusal = snapshot(*run.context);
+
     loadCheckpoint(*run.context, good);
     run.integrator->step(10);
     expectSameState(afterRefusal, snapshot(*run.context));
@@ -309,16 +318,16 @@ size_t integratorDataOffset(const string& checkpoint) {
 
 } // namespace
 
-TEST(Checkpoint, RefusesCheckpointWithOtherBodies) {
-    TestRun run("Reference");
+TEST_P(Checkpoint, RefusesCheckpointWithOtherBodies) {
+    TestRun run(GetParam());
     run.integrator->step(5);
     const vector<vector<int> >& molecules = run.cluster.molecules;
 
     // One molecule fewer is rigid (its atoms are free particles).
     vector<vector<int> > fewer(molecules.begin() + 1, molecules.end());
-    TestRun other("Reference", NoExtras, false, fewer);
+    TestRun other(GetParam(), NoExtras, fewer);
     other.integrator->step(3);
-    expectRefusedAndUnchanged(run, checkpointOf(*other.context), {"rigid bodies", "27", "26"});
+    expectRefusedUntilStateIsSet(run, checkpointOf(*other.context), {"rigid bodies", "27", "26"});
 
     // As many bodies, other memberships: molecule 0 split in two, molecules 1 and 2 joined.
     vector<vector<int> > regrouped(molecules.begin() + 3, molecules.end());
@@ -328,113 +337,180 @@ TEST(Checkpoint, RefusesCheckpointWithOtherBodies) {
     joined.insert(joined.end(), molecules[2].begin(), molecules[2].end());
     regrouped.push_back(joined);
     ASSERT_EQ(molecules.size(), regrouped.size());
-    TestRun sameCount("Reference", NoExtras, false, regrouped);
-    expectRefusedAndUnchanged(run, checkpointOf(*sameCount.context), {"rigid bodies", "signature"});
+    TestRun sameCount(GetParam(), NoExtras, regrouped);
+    expectRefusedUntilStateIsSet(run, checkpointOf(*sameCount.context), {"rigid bodies", "signature"});
 
     // The same bodies listed in another order are the same bodies.
     vector<vector<int> > reordered(molecules.rbegin(), molecules.rend());
     std::reverse(reordered[0].begin(), reordered[0].end());
-    TestRun sameBodies("Reference", NoExtras, false, reordered);
+    TestRun sameBodies(GetParam(), NoExtras, reordered);
     sameBodies.integrator->step(3);
     Snapshot expected = snapshot(*sameBodies.context);
     loadCheckpoint(*run.context, checkpointOf(*sameBodies.context));
     expectSameState(expected, snapshot(*run.context));
+    run.integrator->step(1);
 }
 
-TEST(Checkpoint, RefusesCheckpointOfAnotherIntegrator) {
-    TestRun run("Reference");
+TEST_P(Checkpoint, RefusesCheckpointOfAnotherIntegrator) {
+    TestRun run(GetParam());
     run.integrator->step(5);
     MixedCluster cluster = mixedCluster();
     VerletIntegrator verlet(0.002);
-    Context verletContext(cluster.system, verlet, platform("Reference"));
-    verletContext.setPositions(cluster.positions);
-    expectRefusedAndUnchanged(run, checkpointOf(verletContext), {"no rigid-body integrator data"});
+    std::unique_ptr<Context> verletContext = makeContext(cluster.system, verlet);
+    verletContext->setPositions(cluster.positions);
+    expectRefusedUntilStateIsSet(run, checkpointOf(*verletContext), {"no rigid-body integrator data"});
 
-    TestRun splitting("Reference", NoExtras, true);
-    expectRefusedAndUnchanged(run, checkpointOf(*splitting.context), {"IntegrateRigidSplittingStep", "IntegrateMRattleStep"});
+    const string other = (GetParam().integrator == "MRattle" ? "RigidSplitting" : "MRattle");
+    TestRun otherRun({GetParam().platform, other});
+    expectRefusedUntilStateIsSet(run, checkpointOf(*otherRun.context),
+                                 {"Integrate" + other + "Step", "Integrate" + GetParam().integrator + "Step"});
 }
 
-TEST(Checkpoint, RefusesUnknownFormatVersion) {
-    TestRun run("Reference");
+TEST_P(Checkpoint, RefusesUnknownFormatVersionAndDamage) {
+    TestRun run(GetParam());
     run.integrator->step(5);
     string checkpoint = checkpointOf(*run.context);
     size_t offset = integratorDataOffset(checkpoint);
     int32_t version = 99;
     checkpoint.replace(offset + 8, sizeof(version), reinterpret_cast<const char*>(&version), sizeof(version));
-    expectRefusedAndUnchanged(run, checkpoint, {"format version 99", "reads version 1"});
+    expectRefusedUntilStateIsSet(run, checkpoint, {"format version 99", "reads version 2"});
 
     string badMagic = checkpointOf(*run.context);
     badMagic[integratorDataOffset(badMagic) + 2] = 'X';
-    expectRefusedAndUnchanged(run, badMagic, {"malformed"});
+    expectRefusedUntilStateIsSet(run, badMagic, {"malformed"});
+
+    // A flipped bit in the integrator's name: the message shows the name, unprintable bytes escaped.
+    string flipped = checkpointOf(*run.context);
+    flipped[integratorDataOffset(flipped) + 16] ^= 0x80;
+    expectRefusedUntilStateIsSet(run, flipped, {"kernel '\\x", "this one uses"});
 }
 
-TEST(Checkpoint, RefusesTruncatedCheckpoint) {
-    TestRun run("Reference");
+TEST_P(Checkpoint, RefusesTruncatedCheckpoint) {
+    TestRun run(GetParam());
     run.integrator->step(5);
     string checkpoint = checkpointOf(*run.context);
     size_t offset = integratorDataOffset(checkpoint);
-    // In the body signature, in the integrator's name, at the start of the integrator's
+    // In the kernel's state, in the integrator's name, at the start of the integrator's
     // data, and in the middle of the positions (OpenMM then reads what there is).
-    expectRefusedAndUnchanged(run, checkpoint.substr(0, checkpoint.size() - 3), {"truncated"});
-    expectRefusedAndUnchanged(run, checkpoint.substr(0, offset + 15), {"truncated"});
-    expectRefusedAndUnchanged(run, checkpoint.substr(0, offset), {"truncated"});
-    expectRefusedAndUnchanged(run, checkpoint.substr(0, offset / 3), {"truncated"});
+    expectRefusedUntilStateIsSet(run, checkpoint.substr(0, checkpoint.size() - 3), {"truncated"});
+    expectRefusedUntilStateIsSet(run, checkpoint.substr(0, offset + 15), {"truncated"});
+    expectRefusedUntilStateIsSet(run, checkpoint.substr(0, offset), {"truncated"});
+    expectRefusedUntilStateIsSet(run, checkpoint.substr(0, offset / 3), {"truncated"});
 }
 
-TEST(Checkpoint, RefusedLoadRestoresParametersAndBox) {
-    // Global parameters and the box are overwritten by OpenMM before the integrator sees
-    // the checkpoint; they are put back too. (The other Context is made first: creating a
-    // Context with an Andersen thermostat reseeds the Reference platform's random
-    // generator, which all Contexts of the process share.)
-    TestRun other("Reference", WithThermostat, false, {mixedCluster().molecules[0]});
-    other.context->setParameter(AndersenThermostat::Temperature(), 400);
-    other.context->setPeriodicBoxVectors(Vec3(2.1, 0, 0), Vec3(0, 2.1, 0), Vec3(0, 0, 2.1));
-    other.context->setTime(12.5);
-    string otherCheckpoint = checkpointOf(*other.context);
-    TestRun run("Reference", WithThermostat);
-    run.context->setParameter(AndersenThermostat::Temperature(), 250);
-    run.integrator->step(5);
-    expectRefusedAndUnchanged(run, otherCheckpoint, {"rigid bodies"});
-    EXPECT_EQ(250, run.context->getParameter(AndersenThermostat::Temperature()));
-}
+namespace {
 
-TEST(SavedState, XmlStateContinuesWithBodiesRigidAndShapesKept) {
-    for (const string platformName : {"Reference", "CPU"}) {
-        TestRun run(platformName);
-        run.integrator->step(StepsBefore);
-        State saved = run.context->getState(State::Positions | State::Velocities | State::Parameters);
-        std::stringstream xml;
-        XmlSerializer::serialize<State>(&saved, "State", xml);
-        run.integrator->step(StepsAfter);
-        Snapshot uninterrupted = snapshot(*run.context);
-
-        MixedCluster cluster = mixedCluster();
-        MRattleIntegrator integrator(0.002);
-        Context context(cluster.system, integrator, platform(platformName), platformProperties(platformName));
-        std::unique_ptr<State> loaded(XmlSerializer::deserialize<State>(xml));
-        context.setState(*loaded);
-        Snapshot restored = snapshot(context);
-        // Positions as saved; velocities re-projected onto rigid motion: equal to round-off.
-        EXPECT_TRUE(bitwiseEqual(saved.getPositions(), restored.positions));
-        for (size_t i = 0; i < restored.velocities.size(); i++)
-            for (int d = 0; d < 3; d++)
-                EXPECT_NEAR(saved.getVelocities()[i][d], restored.velocities[i][d], 1e-12);
-        EXPECT_EQ(saved.getStepCount(), restored.stepCount);
-        // 14 benzenes with 6 degrees of freedom, 13 linear molecules with 5.
-        EXPECT_EQ(14 * 6 + 13 * 5, integrator.getNumDegreesOfFreedom());
-        EXPECT_EQ(run.integrator->getNumDegreesOfFreedom(), integrator.getNumDegreesOfFreedom());
-        for (int b = 0; b < integrator.getNumBodiesInEffect(); b++)
-            EXPECT_EQ(integrator.getBodiesInEffect()[b].size() == 3, integrator.isBodyLinear(b)) << "body " << b;
-
-        integrator.step(StepsAfter);
-        Snapshot continued = snapshot(context);
-        EXPECT_LT(maxDistanceChange(cluster.positions, continued.positions, integrator.getBodiesInEffect()), 1e-10);
-        double largest = 0;
-        for (size_t i = 0; i < continued.positions.size(); i++) {
-            Vec3 d = continued.positions[i] - uninterrupted.positions[i];
-            largest = std::max(largest, std::sqrt(d.dot(d)));
-        }
-        // The same trajectory but for the round-off of the projection (single precision on CPU).
-        EXPECT_LT(largest, platformName == "Reference" ? 1e-9 : 1e-5) << platformName;
+/** An integrator that counts the checkpoints written of its Context. */
+template <class Base>
+class CountingCheckpoints : public Base {
+public:
+    explicit CountingCheckpoints(double stepSize) : Base(stepSize) {
     }
+    mutable int checkpointsWritten = 0;
+
+protected:
+    void createCheckpoint(std::ostream& stream) const override {
+        checkpointsWritten++;
+        Base::createCheckpoint(stream);
+    }
+};
+
+} // namespace
+
+TEST_P(Checkpoint, SteppingWritesNoCheckpointEvenWithJunkLeftByARefusedOne) {
+    // A checkpoint from another System, with a global parameter this one lacks, and other
+    // bodies: OpenMM adds the parameter before the integrator refuses the checkpoint.
+    MixedCluster other = mixedCluster();
+    CustomExternalForce* external = new CustomExternalForce("junk*x");
+    external->addGlobalParameter("junk", 0.0);
+    other.system.addForce(external);
+    MRattleIntegrator otherIntegrator(0.002);
+    otherIntegrator.addRigidBody(other.molecules[0]);
+    Context otherContext(other.system, otherIntegrator, platform(GetParam().platform));
+    otherContext.setPositions(other.positions);
+    const string junkCheckpoint = checkpointOf(otherContext);
+
+    std::unique_ptr<RigidBodyIntegrator> counting;
+    if (GetParam().integrator == "MRattle")
+        counting.reset(new CountingCheckpoints<MRattleIntegrator>(0.002));
+    else
+        counting.reset(new CountingCheckpoints<RigidSplittingIntegrator>(0.002));
+    TestRun run(GetParam(), std::move(counting), WithThermostat);
+    auto written = [&] {
+        if (GetParam().integrator == "MRattle")
+            return dynamic_cast<CountingCheckpoints<MRattleIntegrator>&>(*run.integrator).checkpointsWritten;
+        return dynamic_cast<CountingCheckpoints<RigidSplittingIntegrator>&>(*run.integrator).checkpointsWritten;
+    };
+    run.context->setParameter(AndersenThermostat::Temperature(), 310);
+    State saved = run.context->getState(State::Positions | State::Velocities | State::Parameters);
+    EXPECT_THROW(loadCheckpoint(*run.context, junkCheckpoint), OpenMMException);
+    EXPECT_EQ(1, run.context->getParameters().count("junk")) << "OpenMM left the checkpoint's parameter";
+    run.context->setState(saved);
+    const int before = written();
+    for (int i = 0; i < 50; i++) {
+        run.context->setParameter(AndersenThermostat::Temperature(), 300 + i);
+        run.integrator->step(1);
+    }
+    run.context->setVelocitiesToTemperature(300, 3);
+    run.integrator->step(50);
+    EXPECT_EQ(before, written()) << "a step, setParameter() or setVelocities() wrote a checkpoint";
+    checkpointOf(*run.context);
+    EXPECT_EQ(before + 1, written());  // the counter counts
 }
+
+TEST_P(SavedState, GivesRigidVelocitiesBackBitForBit) {
+    TestRun run(GetParam());
+    run.integrator->step(StepsBefore);
+    State saved = run.context->getState(State::Positions | State::Velocities | State::Parameters);
+    std::stringstream xml;
+    XmlSerializer::serialize<State>(&saved, "State", xml);
+    run.integrator->step(StepsAfter);
+    Snapshot uninterrupted = snapshot(*run.context);
+
+    // Into a new Context through XML, as Simulation.saveState()/loadState() do.
+    MixedCluster cluster = mixedCluster();
+    std::unique_ptr<RigidBodyIntegrator> integrator = makeIntegrator(0.002);
+    std::unique_ptr<Context> context = makeContext(cluster.system, *integrator);
+    std::unique_ptr<State> loaded(XmlSerializer::deserialize<State>(xml));
+    context->setState(*loaded);
+    Snapshot restored = snapshot(*context);
+    EXPECT_TRUE(bitwiseEqual(saved.getPositions(), restored.positions));
+    EXPECT_TRUE(bitwiseEqual(saved.getVelocities(), restored.velocities));
+    EXPECT_EQ(saved.getStepCount(), restored.stepCount);
+    // 14 benzenes with 6 degrees of freedom, 13 linear molecules with 5.
+    EXPECT_EQ(14 * 6 + 13 * 5, integrator->getNumDegreesOfFreedom());
+    for (int b = 0; b < integrator->getNumBodiesInEffect(); b++)
+        EXPECT_EQ(integrator->getBodiesInEffect()[b].size() == 3, integrator->isBodyLinear(b)) << "body " << b;
+    // The same trajectory, bit for bit (the forces are computed afresh, as after a checkpoint).
+    integrator->step(StepsAfter);
+    expectSameState(uninterrupted, snapshot(*context));
+}
+
+TEST_P(SavedState, SetVelocitiesProjectsOnlyVelocitiesThatAreNotRigid) {
+    TestRun run(GetParam());
+    run.integrator->step(10);
+    State state = run.context->getState(State::Positions | State::Velocities);
+    run.context->setVelocities(state.getVelocities());
+    EXPECT_TRUE(bitwiseEqual(state.getVelocities(), snapshot(*run.context).velocities));
+
+    // One atom of body 0 pushed: that body is projected back onto rigid motion, the others are untouched.
+    vector<Vec3> pushed = state.getVelocities();
+    pushed[0] += Vec3(0.5, -0.3, 0.2);
+    run.context->setVelocities(pushed);
+    vector<Vec3> projected = snapshot(*run.context).velocities;
+    const vector<int>& body = run.integrator->getBodiesInEffect()[0];
+    const vector<Vec3>& x = state.getPositions();
+    for (int i : body)
+        for (int j : body) {
+            // d|x_i - x_j|^2/dt = 0 for rigid motion.
+            double rate = 2 * (x[i] - x[j]).dot(projected[i] - projected[j]);
+            EXPECT_NEAR(0.0, rate, 1e-12) << i << "-" << j;
+        }
+    EXPECT_GT(maxDeviation(state.getVelocities(), projected), 1e-3);
+    for (int i = 0; i < (int) pushed.size(); i++)
+        if (std::find(body.begin(), body.end(), i) == body.end())
+            EXPECT_TRUE(bitwiseEqual({pushed[i]}, {projected[i]})) << "particle " << i;
+}
+
+INSTANTIATE_TEST_SUITE_P(AllConfigs, Checkpoint, ::testing::ValuesIn(allConfigs()), configName);
+INSTANTIATE_TEST_SUITE_P(AllConfigs, SavedState, ::testing::ValuesIn(allConfigs()), configName);

@@ -16,12 +16,6 @@ using std::vector;
 
 namespace {
 
-std::map<std::string, std::string> platformProperties(const std::string& name) {
-    std::map<std::string, std::string> properties;
-    if (name == "CPU")
-        properties["Threads"] = "1";  // deterministic sums
-    return properties;
-}
 
 /** Positions after the steps from the given start, on one platform. */
 vector<Vec3> finalPositions(const Cluster& c, Integrator& integrator, const std::string& platformName,

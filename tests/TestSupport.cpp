@@ -1,5 +1,6 @@
 #include "TestSupport.h"
 #include "MRattleBuildInfo.h"
+#include "RigidSplittingIntegrator.h"
 #include <gtest/gtest.h>
 #include "openmm/OpenMMException.h"
 #include <cmath>
@@ -27,6 +28,40 @@ void loadPlugins() {
 Platform& platform(const std::string& name) {
     loadPlugins();
     return Platform::getPlatformByName(name);
+}
+
+std::vector<Config> configsOf(const std::string& integrator) {
+    return {{"Reference", integrator}, {"CPU", integrator}};
+}
+
+std::vector<Config> allConfigs() {
+    std::vector<Config> configs = configsOf("MRattle");
+    for (const Config& config : configsOf("RigidSplitting"))
+        configs.push_back(config);
+    return configs;
+}
+
+std::string configName(const ::testing::TestParamInfo<Config>& info) {
+    return info.param.platform + "_" + info.param.integrator;
+}
+
+std::unique_ptr<MRattlePlugin::RigidBodyIntegrator> makeIntegrator(const std::string& kind, double stepSize) {
+    if (kind == "MRattle")
+        return std::unique_ptr<MRattlePlugin::RigidBodyIntegrator>(new MRattlePlugin::MRattleIntegrator(stepSize));
+    if (kind == "RigidSplitting")
+        return std::unique_ptr<MRattlePlugin::RigidBodyIntegrator>(new MRattlePlugin::RigidSplittingIntegrator(stepSize));
+    throw OpenMMException("makeIntegrator: no integrator kind '" + kind + "'");
+}
+
+std::map<std::string, std::string> platformProperties(const std::string& name) {
+    if (name == "CPU")
+        return {{"Threads", "1"}};
+    return {};
+}
+
+std::unique_ptr<Context> RigidBodyTest::makeContext(const System& system, Integrator& integrator) const {
+    return std::unique_ptr<Context>(
+        new Context(system, integrator, platform(GetParam().platform), platformProperties(GetParam().platform)));
 }
 
 namespace {

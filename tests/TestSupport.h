@@ -3,6 +3,7 @@
 
 #include "MRattleIntegrator.h"
 #include "OpenMM.h"
+#include <gtest/gtest.h>
 #include <map>
 #include <functional>
 #include <memory>
@@ -14,6 +15,36 @@ namespace MRattleTest {
 /** Load OpenMM's plugins (for the CPU platform) and register this plugin's kernels. Idempotent. */
 void loadPlugins();
 OpenMM::Platform& platform(const std::string& name);
+
+/**
+ * One platform and one rigid-body integrator: the generic suites (TEST_P) run for every
+ * combination in allConfigs(), so a new platform or integrator gets the whole suite by
+ * adding it there.
+ */
+struct Config {
+    std::string platform;    // "Reference", "CPU"
+    std::string integrator;  // "MRattle", "RigidSplitting"
+};
+/** Every platform with the plugin's kernels, times every rigid-body integrator. */
+std::vector<Config> allConfigs();
+/** Every platform, with one integrator. */
+std::vector<Config> configsOf(const std::string& integrator);
+/** "Reference_MRattle": a test-name suffix. */
+std::string configName(const ::testing::TestParamInfo<Config>& info);
+/** The integrator of that kind. */
+std::unique_ptr<MRattlePlugin::RigidBodyIntegrator> makeIntegrator(const std::string& kind, double stepSize);
+/** Deterministic platform properties: one thread on CPU (several sum forces in varying order). */
+std::map<std::string, std::string> platformProperties(const std::string& platform);
+
+/** The fixture of the generic suites. */
+class RigidBodyTest : public ::testing::TestWithParam<Config> {
+protected:
+    std::unique_ptr<MRattlePlugin::RigidBodyIntegrator> makeIntegrator(double stepSize) const {
+        return MRattleTest::makeIntegrator(GetParam().integrator, stepSize);
+    }
+    /** A Context on this config's platform (one thread on CPU); the integrator must outlive it. */
+    std::unique_ptr<OpenMM::Context> makeContext(const OpenMM::System& system, OpenMM::Integrator& integrator) const;
+};
 
 /** A rigid molecule: site positions (nm) about its centre, masses, LJ and charges. */
 struct Molecule {

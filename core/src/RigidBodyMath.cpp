@@ -1,5 +1,6 @@
 #include "mrattle/RigidBodyMath.h"
 #include "mrattle/Coordinates.h"
+#include <algorithm>
 #include <cmath>
 #include <limits>
 
@@ -240,7 +241,14 @@ RotationSolve driftAndResetBody(const BodyView& body, double stepSize, const dou
     return solve;
 }
 
-void projectBodyVelocities(const BodyView& body, const double* positions, double* velocities) {
+namespace {
+
+/** The rigid-body motion nearest (mass-weighted) to a body's velocities: centre, V and w. */
+struct RigidMotion {
+    Vector3d center, velocity, omega;
+};
+
+RigidMotion nearestRigidMotion(const BodyView& body, const double* positions, const double* velocities) {
     Vector3d massPosition = Vector3d::Zero();
     Vector3d momentum = Vector3d::Zero();
     for (int k = 0; k < body.numAtoms; k++) {
@@ -249,32 +257,61 @@ void projectBodyVelocities(const BodyView& body, const double* positions, double
         massPosition += m * point(positions, atom);
         momentum += m * point(velocities, atom);
     }
-    const Vector3d center = massPosition / body.totalMass;
-    const Vector3d V = momentum / body.totalMass;
+    RigidMotion motion;
+    motion.center = massPosition / body.totalMass;
+    motion.velocity = momentum / body.totalMass;
     // L about the centre; sum m_i a_i = 0, so using v_i instead of v_i - V is exact.
     Matrix3d J = Matrix3d::Zero();
     Vector3d L = Vector3d::Zero();
     for (int k = 0; k < body.numAtoms; k++) {
         int atom = body.atoms[k];
         double m = body.masses[atom];
-        Vector3d a = point(positions, atom) - center;
+        Vector3d a = point(positions, atom) - motion.center;
         J.noalias() += (m * a) * a.transpose();
         L += m * a.cross(point(velocities, atom));
     }
-    Vector3d omega;
     if (body.linear) {
         // I = j (1 - u u^T): no spin about the axis.
-        Vector3d u = linearAxis(body, positions, center);
+        Vector3d u = linearAxis(body, positions, motion.center);
         double j = J.trace();
-        omega = j > 0 ? Vector3d((L - L.dot(u) * u) / j) : Vector3d::Zero();
+        motion.omega = j > 0 ? Vector3d((L - L.dot(u) * u) / j) : Vector3d::Zero();
     } else {
         Matrix3d inertia = J.trace() * Matrix3d::Identity() - J;
-        omega = inertia.inverse() * L;
+        motion.omega = inertia.inverse() * L;
     }
+    return motion;
+}
+
+} // namespace
+
+void projectBodyVelocities(const BodyView& body, const double* positions, double* velocities) {
+    const RigidMotion motion = nearestRigidMotion(body, positions, velocities);
     for (int k = 0; k < body.numAtoms; k++) {
         int atom = body.atoms[k];
-        point(velocities, atom) = V + omega.cross(point(positions, atom) - center);
+        point(velocities, atom) = motion.velocity + motion.omega.cross(point(positions, atom) - motion.center);
     }
+}
+
+double nonRigidVelocityFraction(const BodyView& body, const double* positions, const double* velocities) {
+    const RigidMotion motion = nearestRigidMotion(body, positions, velocities);
+    double scale = 0, residual = 0;
+    for (int k = 0; k < body.numAtoms; k++) {
+        int atom = body.atoms[k];
+        Vector3d rigid = motion.velocity + motion.omega.cross(point(positions, atom) - motion.center);
+        scale = std::max(scale, rigid.norm());
+        residual = std::max(residual, (point(velocities, atom) - rigid).norm());
+    }
+    if (residual == 0)
+        return 0;
+    return scale > 0 ? residual / scale : std::numeric_limits<double>::infinity();
+}
+
+bool projectNonRigidBodyVelocities(const BodyView& body, const double* positions, double* velocities,
+                                   double relativeTolerance) {
+    if (!(nonRigidVelocityFraction(body, positions, velocities) > relativeTolerance))
+        return false;
+    projectBodyVelocities(body, positions, velocities);
+    return true;
 }
 
 } // namespace RigidBodyMath

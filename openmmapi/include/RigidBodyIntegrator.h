@@ -1,7 +1,7 @@
 #ifndef MRATTLE_RIGID_BODY_INTEGRATOR_H_
 #define MRATTLE_RIGID_BODY_INTEGRATOR_H_
 
-#include "RigidBodySet.h"
+#include "RigidBodyTopology.h"
 #include "openmm/Integrator.h"
 #include "openmm/Kernel.h"
 #include "internal/windowsExportMRattle.h"
@@ -11,10 +11,10 @@
 namespace MRattlePlugin {
 
 /**
- * Base of the plugin's rigid-body integrators: the body definitions, the bookkeeping in
- * effect once bound to a Context, velocity projection when the user sets velocities,
- * temperature-correct velocity generation, kinetic energy and force caching. A subclass
- * supplies its kernel name and its step.
+ * Base of the plugin's rigid-body integrators: the declared bodies, the body topology in
+ * effect once bound to a Context, and the glue to the step kernel, which does all the
+ * per-particle work (the step, velocity projection, kinetic energy, temperatures,
+ * thermostat collisions). A subclass supplies its kernel name.
  */
 class OPENMM_EXPORT_MRATTLE RigidBodyIntegrator : public OpenMM::Integrator {
 public:
@@ -42,12 +42,11 @@ public:
     const std::vector<int>& getFreeParticles() const;
     /** Degrees of freedom of the bound Context's System under this integrator. */
     int getNumDegreesOfFreedom() const;
-    /** The body bookkeeping in effect (throws if not bound). */
-    const RigidBodySet& getRigidBodySet() const;
+    /** The body topology in effect (throws if not bound). */
+    const RigidBodyTopology& getTopology() const;
     /**
      * Advance the simulation: every step updates the Context's state (CMMotionRemover,
-     * thermostats, barostats), then runs the kernel's two halves around one evaluation of
-     * the integration force groups at the new positions.
+     * thermostats, barostats), then the kernel takes the step.
      *
      * @param steps  the number of time steps to take
      */
@@ -69,62 +68,36 @@ protected:
     std::vector<OpenMM::Vec3> getVelocitiesForTemperature(const OpenMM::System& system, double temperature,
                                                           int randomSeed) const override;
     /**
-     * Writes a header (format version, integrator kind, a signature of the bodies in
-     * effect) and then writeCheckpointState(). OpenMM calls it after writing the Context's
-     * own data (time, positions, velocities, box, random state). The next step first
-     * refreshes the platform's force caches (as loading does), so that this run and one
-     * continued from the checkpoint stay identical bit for bit.
+     * Writes a header (format version, kernel name, a signature of the bodies in effect),
+     * then the kernel's own state. OpenMM calls it after writing the Context's own data
+     * (time, positions, velocities, box, parameters, random state).
      */
     void createCheckpoint(std::ostream& stream) const override;
     /**
-     * Checks the header written by createCheckpoint(). OpenMM has already overwritten the
-     * Context's data when this is called, so on any mismatch (other bodies, another
-     * integrator, unknown format, truncated stream) the Context is put back as it was
-     * before loadCheckpoint() and an OpenMMException explains what is wrong.
+     * Checks the header written by createCheckpoint() and loads the kernel's state. OpenMM
+     * has already overwritten the Context's data when this is called; on any mismatch
+     * (other bodies, another integrator, unknown format, truncated stream) it throws an
+     * OpenMMException saying what is wrong, and refuses to step until positions and
+     * velocities are set again (or a checkpoint that fits is loaded).
      */
     void loadCheckpoint(std::istream& stream) override;
-    /** State of a subclass to put in checkpoints, after the base class's header; none by default. */
-    virtual void writeCheckpointState(std::ostream& /*stream*/) const {
-    }
-    /** Read what writeCheckpointState() wrote; throw OpenMMException if it is malformed. */
-    virtual void readCheckpointState(std::istream& /*stream*/) {
-    }
-
-    /** Throw unless bound to a Context. */
-    void requireContext() const;
-
-    mutable OpenMM::Kernel kernel;
-    RigidBodySet bodySet;
 
 private:
-    /** Start of a step: let forces update the state; make velocities rigid if something changed them. */
-    void beginStep();
-    /** Compute forces at the current positions unless the cached ones are valid. */
-    void ensureForces();
-    /** Compute forces at the current positions (after the positions moved). */
-    void computeForces();
-    /** At the end of step(): remember the Context's state, which a failed loadCheckpoint() puts back. */
-    void endSteps();
+    /** Throw unless bound to a Context. */
+    void requireContext() const;
+    /** Whether this integrator is the one that steps the Context (it may be a member of a CompoundIntegrator). */
+    bool isCurrentIntegrator() const;
+    mutable OpenMM::Kernel kernel;
     std::vector<std::vector<int> > declaredBodies;
+    RigidBodyTopology topology;
     bool forcesAreValid = false;
-    bool restoringCheckpoint = false;
-    bool hasVelocityChangingForce = false;
-    bool inProjection = false;
-
-    /** Recompute forces after making the platform rebuild what it caches from earlier positions. */
-    void refreshForceCaches();
-    /** After a thermostat collision hit part of a body, give the whole body fresh thermal velocities. */
-    void thermalizeCollidedBodies();
-    /** A checkpoint of the whole Context at the last point it was known to be consistent. */
-    void saveRollbackState();
-    /** Load the rollback checkpoint; true on success. */
-    bool restoreRollbackState();
-    std::vector<char> rollbackState;
-    std::vector<std::string> rollbackParameterNames;
-    bool rollbackStateIsCurrent = false;
-    bool rollingBack = false;
-    bool takingRollbackState = false;
-    mutable bool refreshCachesBeforeStep = false;
+    /** Velocities were set while another integrator was current: project them before stepping. */
+    bool velocitiesNeedProjection = false;
+    /** The Context's step count after this integrator's last step; another value means another integrator stepped. */
+    long long lastStepCount = -1;
+    /** A refused checkpoint left mixed data: stepping waits until positions and velocities are set again. */
+    bool refusedCheckpoint = false;
+    bool positionsSetSinceRefusal = false, velocitiesSetSinceRefusal = false;
 };
 
 } // namespace MRattlePlugin

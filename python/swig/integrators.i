@@ -102,7 +102,7 @@ static PyObject* intListToPython(const std::vector<int>& values) {
 
 #define OPENMM_EXPORT_MRATTLE
 /* The bookkeeping object is C++-only; its content is exposed by the integrator's queries. */
-%ignore MRattlePlugin::RigidBodyIntegrator::getRigidBodySet;
+%ignore MRattlePlugin::RigidBodyIntegrator::getTopology;
 %include "RigidBodyIntegrator.h"
 
 /*

@@ -91,6 +91,27 @@ RotationSolve driftAndResetBody(const BodyView& body, double stepSize, const dou
  */
 void projectBodyVelocities(const BodyView& body, const double* positions, double* velocities);
 
+/**
+ * How far a body's velocities are from rigid-body motion: the largest distance of an atom's
+ * velocity from the projection's, over the largest velocity of the projection (0 for
+ * rigid motion, infinite for velocities with no rigid part at all).
+ */
+double nonRigidVelocityFraction(const BodyView& body, const double* positions, const double* velocities);
+
+/**
+ * Velocities that are already rigid to round-off stay bit for bit as they are (projecting
+ * them again would change them at round-off, and restarts would no longer be exact);
+ * others are replaced by projectBodyVelocities(). Rigid means every atom's velocity is
+ * nonRigidVelocityFraction() <= relativeTolerance.
+ *
+ * @return true if the velocities were projected
+ */
+bool projectNonRigidBodyVelocities(const BodyView& body, const double* positions, double* velocities,
+                                   double relativeTolerance);
+
+/** The relative tolerance below which velocities count as rigid (round-off of a projection). */
+constexpr double RigidVelocityTolerance = 1e-12;
+
 } // namespace RigidBodyMath
 } // namespace MRattlePlugin
 

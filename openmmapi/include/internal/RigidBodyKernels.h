@@ -1,11 +1,12 @@
 #ifndef MRATTLE_RIGID_BODY_KERNELS_H_
 #define MRATTLE_RIGID_BODY_KERNELS_H_
 
-#include "RigidBodySet.h"
+#include "RigidBodyTopology.h"
 #include "openmm/KernelImpl.h"
 #include "openmm/Platform.h"
 #include "openmm/System.h"
 #include "openmm/Vec3.h"
+#include <iosfwd>
 #include <string>
 #include <vector>
 
@@ -18,10 +19,12 @@ namespace MRattlePlugin {
 class RigidBodyIntegrator;
 
 /**
- * What every rigid-body integrator needs from its platform: one step in two halves around
- * the force evaluation at the new positions, velocity projection onto rigid-body motion
- * (with free-particle constraints) and the kinetic energy. Each integrator has its own
- * kernel name (a subclass below) so a platform can implement each one.
+ * What every rigid-body integrator needs from its platform. The kernel owns the step and
+ * all per-particle and per-body work (the API class does O(1) work per step); it keeps its
+ * own copy of the body topology and the state that depends on the configuration (which
+ * bodies are linear) or on the run (random streams), and writes that state into
+ * checkpoints. Each integrator has its own kernel name (a subclass below) so that a
+ * platform can implement each one.
  */
 class OPENMM_EXPORT_MRATTLE RigidBodyKernel : public OpenMM::KernelImpl {
 public:
@@ -29,23 +32,47 @@ public:
     }
     ~RigidBodyKernel() override;
     /**
-     * @param bodies  the integrator's body bookkeeping; it outlives the kernel
+     * @param topology  the bodies in effect; the kernel keeps a copy
      */
-    virtual void initialize(const OpenMM::System& system, const RigidBodySet& bodies) = 0;
+    virtual void initialize(const OpenMM::System& system, const RigidBodyTopology& topology) = 0;
     /**
-     * Replace velocities (one per particle) by their projection onto rigid-body motion at
-     * the Context's positions; velocities along free-particle constraints are removed to
-     * the given tolerance.
+     * One step: with an AndersenThermostat in the System, bodies with a collided atom first
+     * get fresh thermal velocities as a whole; then the forces (unless forcesAreValid), the
+     * first half (half kick, drift, the integrator's position update, free-particle
+     * constraints, virtual sites), the forces at the new positions and the second half
+     * (half kick, rigid-body velocity projection). Advances time and step count. A step
+     * that fails throws an OpenMMException and leaves positions and velocities as they were.
+     *
+     * @param forcesAreValid  in: the Context's forces are those at the current positions
+     *                        for the integration force groups; out: true after a step
      */
-    virtual void projectVelocities(OpenMM::ContextImpl& context, std::vector<OpenMM::Vec3>& velocities, double tolerance) = 0;
-    /** The same, in place, on the velocities held by the Context. */
-    virtual void projectContextVelocities(OpenMM::ContextImpl& context, double tolerance) = 0;
+    virtual void execute(OpenMM::ContextImpl& context, const RigidBodyIntegrator& integrator, bool& forcesAreValid) = 0;
+    /** The Context's positions were set: classify the bodies' shapes (linear or not) from them. */
+    virtual void updateShapes(OpenMM::ContextImpl& context) = 0;
+    /**
+     * Make the Context's velocities rigid: each body whose velocities are not rigid-body
+     * motion at the current positions is replaced by its mass-weighted projection;
+     * velocities along free-particle constraints are removed to the given tolerance.
+     * Velocities that are already rigid (to round-off) are left bit for bit as they are.
+     */
+    virtual void projectVelocities(OpenMM::ContextImpl& context, double tolerance) = 0;
+    /**
+     * Maxwell-Boltzmann velocities projected onto the rigid degrees of freedom, rescaled to
+     * exactly the given temperature with the rigid-body degrees of freedom (and without
+     * centre-of-mass motion if the System has a CMMotionRemover).
+     */
+    virtual std::vector<OpenMM::Vec3> getVelocitiesForTemperature(OpenMM::ContextImpl& context, double temperature,
+                                                                  int randomSeed, double tolerance) = 0;
     /** Sum of m v^2 / 2 over the Context's velocities. */
     virtual double computeKineticEnergy(OpenMM::ContextImpl& context) = 0;
-    /** First half: half kick, drift and the integrator's position update, free-particle constraints, virtual sites. */
-    virtual void integratePositions(OpenMM::ContextImpl& context, const RigidBodyIntegrator& integrator) = 0;
-    /** Second half, with the forces at the new positions: half kick, velocity reset; advances time and step count. */
-    virtual void integrateVelocities(OpenMM::ContextImpl& context, const RigidBodyIntegrator& integrator) = 0;
+    /** Whether body number index is linear (collinear atoms, 5 degrees of freedom) at the last positions set. */
+    virtual bool isBodyLinear(int index) const = 0;
+    /** How many bodies are linear at the last positions set. */
+    virtual int getNumLinearBodies() const = 0;
+    /** Write the kernel's own state (e.g. its random stream) into a checkpoint. */
+    virtual void createCheckpoint(OpenMM::ContextImpl& context, std::ostream& stream) const = 0;
+    /** Read what createCheckpoint() wrote; throw an OpenMMException saying what is wrong if it does not fit. */
+    virtual void loadCheckpoint(OpenMM::ContextImpl& context, std::istream& stream) = 0;
 };
 
 /** M-RATTLE: the position update resets each body with the 3 + 3 conditions. */

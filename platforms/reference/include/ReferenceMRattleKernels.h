@@ -10,6 +10,8 @@ namespace MRattlePlugin {
 class ReferenceIntegrateMRattleStepKernel : public ReferenceRigidBodyStepKernel<IntegrateMRattleStepKernel> {
 public:
     using ReferenceRigidBodyStepKernel::ReferenceRigidBodyStepKernel;
+
+protected:
     void integratePositions(OpenMM::ContextImpl& context, const RigidBodyIntegrator& integrator) override;
 };
 

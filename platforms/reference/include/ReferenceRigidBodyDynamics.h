@@ -1,24 +1,29 @@
 #ifndef MRATTLE_REFERENCE_RIGID_BODY_DYNAMICS_H_
 #define MRATTLE_REFERENCE_RIGID_BODY_DYNAMICS_H_
 
-#include "RigidBodySet.h"
+#include "RigidBodyTopology.h"
+#include "mrattle/RigidBodyMath.h"
 #include "openmm/System.h"
 #include "openmm/Vec3.h"
 #include "openmm/internal/ContextImpl.h"
 #include "openmm/reference/ReferenceConstraints.h"
+#include <iosfwd>
 #include <memory>
+#include <random>
 #include <vector>
 
 namespace MRattlePlugin {
 
 /**
  * What every rigid-body integrator does the same way on the Reference and CPU platforms:
- * access to the Context's arrays, RATTLE for constraints among free particles (OpenMM's
- * own ReferenceConstraints), velocity projection and kinetic energy.
+ * the kernel's copy of the body topology and its per-configuration state (which bodies
+ * are linear), access to the Context's arrays, RATTLE for constraints among free particles
+ * (OpenMM's own ReferenceConstraints), velocity projection, kinetic energy, temperature
+ * velocities and the Andersen body collisions with their random stream.
  */
 class ReferenceRigidBodyDynamics {
 public:
-    ReferenceRigidBodyDynamics(const OpenMM::System& system, const RigidBodySet& bodies);
+    ReferenceRigidBodyDynamics(const OpenMM::System& system, const RigidBodyTopology& topology);
 
     static std::vector<OpenMM::Vec3>& positions(OpenMM::ContextImpl& context);
     static std::vector<OpenMM::Vec3>& velocities(OpenMM::ContextImpl& context);
@@ -26,11 +31,30 @@ public:
     /** Advance the Context's time and step count by one step. */
     static void advanceClock(OpenMM::ContextImpl& context, double stepSize);
 
+    const RigidBodyTopology& topology() const {
+        return bodies;
+    }
+    const std::vector<double>& inverseMasses() const {
+        return inverseMass;
+    }
+    /** The numerical core's view of one body. */
+    RigidBodyMath::BodyView view(int body) const;
+
+    /** Classify each body's shape (linear or not) from the given positions. */
+    void updateShapes(const std::vector<OpenMM::Vec3>& positions);
+    bool isLinear(int body) const {
+        return linear[body] != 0;
+    }
+    int getNumLinearBodies() const;
+
     /** RATTLE position step for free-particle constraints: moves newPositions onto the constraints. */
     void constrainFreePositions(std::vector<OpenMM::Vec3>& oldPositions, std::vector<OpenMM::Vec3>& newPositions,
                                 double tolerance);
-    /** Rigid-body projection of velocities at the given positions, and free constraints. */
+    /** Free constraints, then every body's rigid-body projection (RATTLE's velocity step). */
     void projectVelocities(std::vector<OpenMM::Vec3>& positions, std::vector<OpenMM::Vec3>& velocities, double tolerance);
+    /** The same, but bodies whose velocities are already rigid keep them bit for bit. */
+    void projectNonRigidVelocities(std::vector<OpenMM::Vec3>& positions, std::vector<OpenMM::Vec3>& velocities,
+                                   double tolerance);
     double kineticEnergy(const std::vector<OpenMM::Vec3>& velocities) const;
     /**
      * The second half of every rigid-body step, with the forces at the new positions: half
@@ -39,22 +63,31 @@ public:
      * the clock.
      */
     void kickAndProject(OpenMM::ContextImpl& context, double stepSize, double tolerance);
+    /** Rigid-body Maxwell-Boltzmann velocities at exactly this temperature (RigidBodyKernel). */
+    std::vector<OpenMM::Vec3> velocitiesForTemperature(std::vector<OpenMM::Vec3>& positions, double temperature,
+                                                       int randomSeed, double tolerance);
 
-    const RigidBodySet& bodies() const {
-        return *bodySet;
+    /** True if the System has an AndersenThermostat, whose collisions must act on whole bodies. */
+    bool hasAndersenThermostat() const {
+        return andersen;
     }
-    const OpenMM::System& system() const {
-        return *systemRef;
-    }
-    std::vector<double>& inverseMasses() {
-        return inverseMass;
-    }
+    /**
+     * After the thermostat has randomised single atoms: every body with a collided atom
+     * (its velocities are no longer rigid) gets fresh Maxwell-Boltzmann velocities for all
+     * its atoms from this kernel's random stream, then every velocity is made rigid.
+     */
+    void collideBodies(OpenMM::ContextImpl& context, double tolerance);
+    /** The random stream, for checkpoints. */
+    void writeState(std::ostream& stream) const;
+    void readState(std::istream& stream);
 
 private:
-    const OpenMM::System* systemRef;
-    const RigidBodySet* bodySet;
+    RigidBodyTopology bodies;
     std::vector<double> inverseMass;
+    std::vector<char> linear;
     std::unique_ptr<OpenMM::ReferenceConstraints> freeConstraints;
+    bool andersen = false;
+    std::mt19937_64 collisionRandom;
 };
 
 /** Raw 3N-double view of a Vec3 array, for the numerical core. */

@@ -3,6 +3,7 @@
 
 #include "ReferenceRigidBodyDynamics.h"
 #include "RigidBodyIntegrator.h"
+#include "openmm/internal/ContextImpl.h"
 #include <memory>
 #include <string>
 #include <vector>
@@ -10,36 +11,69 @@
 namespace MRattlePlugin {
 
 /**
- * The part of a rigid-body step kernel that is the same for every integrator on the
- * Reference and CPU platforms: set-up, velocity projection, kinetic energy and the second
- * half of the step (half kick, then RATTLE's velocity step, the rigid-body projection).
- * A kernel derives from it with its interface (e.g. IntegrateMRattleStepKernel) and
- * supplies integratePositions().
+ * Everything of a rigid-body step kernel on the Reference and CPU platforms but the
+ * integrator's position update: set-up, the step, velocity projection, temperatures,
+ * kinetic energy, shapes and checkpoints. A kernel derives from it with its interface
+ * (e.g. IntegrateMRattleStepKernel) and supplies integratePositions().
  */
 template <class StepKernel>
 class ReferenceRigidBodyStepKernel : public StepKernel {
 public:
     ReferenceRigidBodyStepKernel(const std::string& name, const OpenMM::Platform& platform) : StepKernel(name, platform) {
     }
-    void initialize(const OpenMM::System& system, const RigidBodySet& bodies) override {
-        dynamics.reset(new ReferenceRigidBodyDynamics(system, bodies));
+    void initialize(const OpenMM::System& system, const RigidBodyTopology& topology) override {
+        dynamics.reset(new ReferenceRigidBodyDynamics(system, topology));
         newPositions.resize(system.getNumParticles());
         newVelocities.resize(system.getNumParticles());
     }
-    void projectVelocities(OpenMM::ContextImpl& context, std::vector<OpenMM::Vec3>& velocities, double tolerance) override {
-        dynamics->projectVelocities(ReferenceRigidBodyDynamics::positions(context), velocities, tolerance);
+    void execute(OpenMM::ContextImpl& context, const RigidBodyIntegrator& integrator, bool& forcesAreValid) override {
+        const double tolerance = integrator.getConstraintTolerance();
+        if (dynamics->hasAndersenThermostat())
+            dynamics->collideBodies(context, tolerance);
+        if (!forcesAreValid)
+            context.calcForcesAndEnergy(true, false, integrator.getIntegrationForceGroups());
+        integratePositions(context, integrator);  // leaves the Context as it was if it throws
+        forcesAreValid = false;
+        context.calcForcesAndEnergy(true, false, integrator.getIntegrationForceGroups());
+        dynamics->kickAndProject(context, integrator.getStepSize(), tolerance);
+        forcesAreValid = true;
     }
-    void projectContextVelocities(OpenMM::ContextImpl& context, double tolerance) override {
-        projectVelocities(context, ReferenceRigidBodyDynamics::velocities(context), tolerance);
+    void updateShapes(OpenMM::ContextImpl& context) override {
+        dynamics->updateShapes(ReferenceRigidBodyDynamics::positions(context));
+    }
+    void projectVelocities(OpenMM::ContextImpl& context, double tolerance) override {
+        dynamics->projectNonRigidVelocities(ReferenceRigidBodyDynamics::positions(context),
+                                            ReferenceRigidBodyDynamics::velocities(context), tolerance);
+    }
+    std::vector<OpenMM::Vec3> getVelocitiesForTemperature(OpenMM::ContextImpl& context, double temperature,
+                                                          int randomSeed, double tolerance) override {
+        return dynamics->velocitiesForTemperature(ReferenceRigidBodyDynamics::positions(context), temperature,
+                                                  randomSeed, tolerance);
     }
     double computeKineticEnergy(OpenMM::ContextImpl& context) override {
         return dynamics->kineticEnergy(ReferenceRigidBodyDynamics::velocities(context));
     }
-    void integrateVelocities(OpenMM::ContextImpl& context, const RigidBodyIntegrator& integrator) override {
-        dynamics->kickAndProject(context, integrator.getStepSize(), integrator.getConstraintTolerance());
+    bool isBodyLinear(int index) const override {
+        return dynamics->isLinear(index);
+    }
+    int getNumLinearBodies() const override {
+        return dynamics->getNumLinearBodies();
+    }
+    void createCheckpoint(OpenMM::ContextImpl& context, std::ostream& stream) const override {
+        dynamics->writeState(stream);
+    }
+    void loadCheckpoint(OpenMM::ContextImpl& context, std::istream& stream) override {
+        dynamics->readState(stream);
     }
 
 protected:
+    /**
+     * The first half of the step: half kick, drift, the integrator's position update,
+     * free-particle constraints, virtual sites. Throws an OpenMMException, with the Context
+     * unchanged, if the update fails.
+     */
+    virtual void integratePositions(OpenMM::ContextImpl& context, const RigidBodyIntegrator& integrator) = 0;
+
     std::unique_ptr<ReferenceRigidBodyDynamics> dynamics;
     std::vector<OpenMM::Vec3> newPositions, newVelocities;  // step buffers
 };

@@ -10,6 +10,8 @@ namespace MRattlePlugin {
 class ReferenceIntegrateRigidSplittingStepKernel : public ReferenceRigidBodyStepKernel<IntegrateRigidSplittingStepKernel> {
 public:
     using ReferenceRigidBodyStepKernel::ReferenceRigidBodyStepKernel;
+
+protected:
     void integratePositions(OpenMM::ContextImpl& context, const RigidBodyIntegrator& integrator) override;
 };
 

@@ -28,13 +28,12 @@ void ReferenceIntegrateMRattleStepKernel::integratePositions(ContextImpl& contex
     // Free particles: RATTLE for their constraints, velocities from the displacement.
     dynamics->constrainFreePositions(x, newPositions, integrator.getConstraintTolerance());
     const double inverseStep = 1.0 / h;
-    for (int i : dynamics->bodies().getFreeParticles())
+    for (int i : dynamics->topology().getFreeParticles())
         newVelocities[i] = (newPositions[i] - x[i]) * inverseStep;
     // Bodies: M-RATTLE's reset, new positions and velocities formed from displacements.
-    const RigidBodySet& bodies = dynamics->bodies();
-    for (int b = 0; b < bodies.getNumBodies(); b++) {
+    for (int b = 0; b < dynamics->topology().getNumBodies(); b++) {
         RigidBodyMath::RotationSolve solve = RigidBodyMath::driftAndResetBody(
-            bodies.view(b), h, coordinates(x), coordinates(newVelocities), coordinates(newPositions));
+            dynamics->view(b), h, coordinates(x), coordinates(newVelocities), coordinates(newPositions));
         if (!solve.converged)
             throw OpenMMException("MRattleIntegrator: the position reset of rigid body " + std::to_string(b) +
                                   " found no rotation in " + std::to_string(RigidBodyMath::MaxRotationIterations) +

@@ -1,5 +1,11 @@
 #include "ReferenceRigidBodyDynamics.h"
+#include "openmm/AndersenThermostat.h"
+#include "openmm/OpenMMException.h"
 #include "openmm/reference/ReferencePlatform.h"
+#include "openmm/reference/SimTKOpenMMRealType.h"
+#include <cmath>
+#include <sstream>
+#include <string>
 
 using namespace MRattlePlugin;
 using namespace OpenMM;
@@ -12,16 +18,20 @@ ReferencePlatform::PlatformData& platformData(ContextImpl& context) {
     return *reinterpret_cast<ReferencePlatform::PlatformData*>(context.getPlatformData());
 }
 
+/** Velocities differing from their rigid projection by more than this fraction have collided. */
+const double CollisionThreshold = 1e-8;
+
 } // namespace
 
-ReferenceRigidBodyDynamics::ReferenceRigidBodyDynamics(const System& system, const RigidBodySet& bodies)
-    : systemRef(&system), bodySet(&bodies) {
+ReferenceRigidBodyDynamics::ReferenceRigidBodyDynamics(const System& system, const RigidBodyTopology& topology)
+    : bodies(topology) {
     const int n = system.getNumParticles();
     inverseMass.resize(n);
     for (int i = 0; i < n; i++) {
         double mass = system.getParticleMass(i);
         inverseMass[i] = (mass == 0.0 ? 0.0 : 1.0 / mass);
     }
+    linear.assign(bodies.getNumBodies(), 0);
     if (!bodies.getFreeConstraints().empty()) {
         // OpenMM's constraint code (CCMA, SETTLE for rigid water) on the free constraints only.
         System freeSystem;
@@ -35,6 +45,12 @@ ReferenceRigidBodyDynamics::ReferenceRigidBodyDynamics(const System& system, con
         }
         freeConstraints.reset(new ReferenceConstraints(freeSystem));
     }
+    for (int f = 0; f < system.getNumForces(); f++)
+        if (const AndersenThermostat* thermostat = dynamic_cast<const AndersenThermostat*>(&system.getForce(f))) {
+            andersen = true;
+            int seed = thermostat->getRandomNumberSeed();
+            collisionRandom.seed(seed != 0 ? (uint64_t) seed : (uint64_t) std::random_device()());
+        }
 }
 
 vector<Vec3>& ReferenceRigidBodyDynamics::positions(ContextImpl& context) {
@@ -55,6 +71,28 @@ void ReferenceRigidBodyDynamics::advanceClock(ContextImpl& context, double stepS
     data.stepCount++;
 }
 
+RigidBodyMath::BodyView ReferenceRigidBodyDynamics::view(int body) const {
+    const vector<int>& atoms = bodies.getBodyParticles(body);
+    return RigidBodyMath::BodyView{atoms.data(), (int) atoms.size(), bodies.getMasses().data(), bodies.getBodyMass(body),
+                                   linear[body] != 0};
+}
+
+void ReferenceRigidBodyDynamics::updateShapes(const vector<Vec3>& positions) {
+    const double* data = reinterpret_cast<const double*>(positions.data());
+    for (int b = 0; b < bodies.getNumBodies(); b++) {
+        RigidBodyMath::BodyView body = view(b);
+        Eigen::Vector3d center = RigidBodyMath::centerOfMass(body, data);
+        linear[b] = RigidBodyMath::isLinearShape(RigidBodyMath::secondMoment(body, data, center));
+    }
+}
+
+int ReferenceRigidBodyDynamics::getNumLinearBodies() const {
+    int count = 0;
+    for (char isLinearBody : linear)
+        count += (isLinearBody != 0);
+    return count;
+}
+
 void ReferenceRigidBodyDynamics::constrainFreePositions(vector<Vec3>& oldPositions, vector<Vec3>& newPositions,
                                                         double tolerance) {
     if (freeConstraints)
@@ -66,8 +104,18 @@ void ReferenceRigidBodyDynamics::projectVelocities(vector<Vec3>& positions, vect
         freeConstraints->applyToVelocities(positions, velocities, inverseMass, tolerance);
     const double* x = coordinates(positions);
     double* v = coordinates(velocities);
-    for (int b = 0; b < bodySet->getNumBodies(); b++)
-        RigidBodyMath::projectBodyVelocities(bodySet->view(b), x, v);
+    for (int b = 0; b < bodies.getNumBodies(); b++)
+        RigidBodyMath::projectBodyVelocities(view(b), x, v);
+}
+
+void ReferenceRigidBodyDynamics::projectNonRigidVelocities(vector<Vec3>& positions, vector<Vec3>& velocities,
+                                                           double tolerance) {
+    if (freeConstraints)
+        freeConstraints->applyToVelocities(positions, velocities, inverseMass, tolerance);
+    const double* x = coordinates(positions);
+    double* v = coordinates(velocities);
+    for (int b = 0; b < bodies.getNumBodies(); b++)
+        RigidBodyMath::projectNonRigidBodyVelocities(view(b), x, v, RigidBodyMath::RigidVelocityTolerance);
 }
 
 void ReferenceRigidBodyDynamics::kickAndProject(ContextImpl& context, double stepSize, double tolerance) {
@@ -88,4 +136,95 @@ double ReferenceRigidBodyDynamics::kineticEnergy(const vector<Vec3>& velocities)
         if (inverseMass[i] != 0)
             energy += 0.5 * velocities[i].dot(velocities[i]) / inverseMass[i];
     return energy;
+}
+
+vector<Vec3> ReferenceRigidBodyDynamics::velocitiesForTemperature(vector<Vec3>& positions, double temperature,
+                                                                  int randomSeed, double tolerance) {
+    // Maxwell-Boltzmann per particle, then the rigid-body projection (which keeps the
+    // distribution's form on the rigid degrees of freedom), then an exact rescale to the
+    // requested kinetic temperature with the rigid-body degrees of freedom.
+    std::mt19937_64 generator(randomSeed);
+    std::normal_distribution<double> gaussian(0.0, 1.0);
+    const int numParticles = inverseMass.size();
+    vector<Vec3> velocities(numParticles, Vec3());
+    for (int i = 0; i < numParticles; i++) {
+        if (inverseMass[i] != 0) {
+            double scale = std::sqrt(BOLTZ * temperature * inverseMass[i]);
+            double x = gaussian(generator), y = gaussian(generator), z = gaussian(generator);
+            velocities[i] = Vec3(x, y, z) * scale;
+        }
+    }
+    projectVelocities(positions, velocities, tolerance);
+    const vector<double>& masses = bodies.getMasses();
+    double totalMass = 0;
+    Vec3 momentum;
+    for (int i = 0; i < numParticles; i++) {
+        totalMass += masses[i];
+        momentum += velocities[i] * masses[i];
+    }
+    if (bodies.removesCenterOfMassMotion() && totalMass > 0) {
+        Vec3 centerVelocity = momentum / totalMass;
+        for (int i = 0; i < numParticles; i++)
+            if (inverseMass[i] != 0)
+                velocities[i] -= centerVelocity;
+    }
+    double kinetic = kineticEnergy(velocities);
+    int dof = bodies.getNumDegreesOfFreedom(getNumLinearBodies());
+    if (kinetic > 0 && dof > 0) {
+        double scale = std::sqrt(0.5 * dof * BOLTZ * temperature / kinetic);
+        for (Vec3& v : velocities)
+            v *= scale;
+    }
+    return velocities;
+}
+
+void ReferenceRigidBodyDynamics::collideBodies(ContextImpl& context, double tolerance) {
+    // AndersenThermostat randomizes single particles (or groups held by constraints).
+    // Projecting a body of which only some atoms are fresh onto rigid motion does not keep
+    // the rigid-body Boltzmann distribution (bonded water settles ~10% cold), while
+    // projecting fresh Maxwell-Boltzmann velocities of all its atoms does.
+    vector<Vec3>& x = positions(context);
+    vector<Vec3>& v = velocities(context);
+    const double* positionData = coordinates(x);
+    const double temperature = context.getParameter(AndersenThermostat::Temperature());
+    std::normal_distribution<double> gaussian(0.0, 1.0);
+    for (int b = 0; b < bodies.getNumBodies(); b++) {
+        if (!(RigidBodyMath::nonRigidVelocityFraction(view(b), positionData, coordinates(v)) > CollisionThreshold))
+            continue;  // still rigid: no collision
+        for (int i : bodies.getBodyParticles(b)) {
+            double sigma = std::sqrt(BOLTZ * temperature * inverseMass[i]);
+            double gx = gaussian(collisionRandom), gy = gaussian(collisionRandom), gz = gaussian(collisionRandom);
+            v[i] = Vec3(gx, gy, gz) * sigma;
+        }
+    }
+    projectNonRigidVelocities(x, v, tolerance);
+}
+
+void ReferenceRigidBodyDynamics::writeState(std::ostream& stream) const {
+    std::ostringstream text;
+    text << collisionRandom;
+    const std::string state = text.str();
+    int32_t length = state.size();
+    stream.write(reinterpret_cast<const char*>(&length), sizeof(length));
+    stream.write(state.data(), length);
+}
+
+void ReferenceRigidBodyDynamics::readState(std::istream& stream) {
+    int32_t length = -1;
+    stream.read(reinterpret_cast<char*>(&length), sizeof(length));
+    if (!stream || stream.gcount() != (std::streamsize) sizeof(length))
+        throw OpenMMException("the checkpoint is truncated (it ends before the kernel's random state)");
+    if (length < 0 || length > (1 << 20))
+        throw OpenMMException("the checkpoint's kernel data is malformed (random state of length " +
+                              std::to_string(length) + ")");
+    std::string state(length, ' ');
+    stream.read(&state[0], length);
+    if (!stream || stream.gcount() != length)
+        throw OpenMMException("the checkpoint is truncated (it ends in the kernel's random state)");
+    std::istringstream text(state);
+    std::mt19937_64 generator;
+    text >> generator;
+    if (text.fail())
+        throw OpenMMException("the checkpoint's kernel data is malformed (its random state cannot be read)");
+    collisionRandom = generator;
 }

@@ -12,7 +12,7 @@ void ReferenceIntegrateRigidSplittingStepKernel::integratePositions(ContextImpl&
     vector<Vec3>& v = ReferenceRigidBodyDynamics::velocities(context);
     vector<Vec3>& f = ReferenceRigidBodyDynamics::forces(context);
     const vector<double>& inverseMass = dynamics->inverseMasses();
-    const RigidBodySet& bodies = dynamics->bodies();
+    const RigidBodyTopology& bodies = dynamics->topology();
     const double h = integrator.getStepSize();
     const int n = x.size();
 
@@ -22,7 +22,7 @@ void ReferenceIntegrateRigidSplittingStepKernel::integratePositions(ContextImpl&
         newPositions[i] = (inverseMass[i] != 0 ? x[i] + (v[i] + f[i] * (0.5 * h * inverseMass[i])) * h : x[i]);
     dynamics->constrainFreePositions(x, newPositions, integrator.getConstraintTolerance());
     for (int b = 0; b < bodies.getNumBodies(); b++)
-        RigidBodyRotor::positionStep(bodies.view(b), coordinates(x), coordinates(v), coordinates(f), h,
+        RigidBodyRotor::positionStep(dynamics->view(b), coordinates(x), coordinates(v), coordinates(f), h,
                                      coordinates(newPositions), coordinates(newVelocities));
     const double inverseStep = 1.0 / h;
     for (int i = 0; i < n; i++) {

@@ -1,6 +1,7 @@
-#include "RigidBodySet.h"
+#include "RigidBodyTopology.h"
 #include "openmm/CMMotionRemover.h"
 #include "openmm/OpenMMException.h"
+#include <algorithm>
 #include <set>
 #include <sstream>
 
@@ -20,7 +21,7 @@ void fail(const std::string& message) {
 
 } // namespace
 
-void RigidBodySet::checkBodyDefinition(int bodyIndex, const vector<int>& particles) {
+void RigidBodyTopology::checkBodyDefinition(int bodyIndex, const vector<int>& particles) {
     if (particles.empty())
         fail(describeBody(bodyIndex) + " is empty: a rigid body needs at least one particle");
     std::set<int> seen;
@@ -32,7 +33,7 @@ void RigidBodySet::checkBodyDefinition(int bodyIndex, const vector<int>& particl
     }
 }
 
-RigidBodySet::RigidBodySet(const System& system, const vector<vector<int> >& explicitBodies,
+RigidBodyTopology::RigidBodyTopology(const System& system, const vector<vector<int> >& explicitBodies,
                            const vector<vector<int> >& molecules) {
     const int numParticles = system.getNumParticles();
     masses.resize(numParticles);
@@ -90,7 +91,6 @@ RigidBodySet::RigidBodySet(const System& system, const vector<vector<int> >& exp
         bodies.push_back(members);
         bodyMass.push_back(total);
     }
-    linear.assign(bodies.size(), 0);
     for (int i = 0; i < numParticles; i++)
         if (bodyOfParticle[i] == -1 && isMassive(i))
             freeParticles.push_back(i);
@@ -116,22 +116,24 @@ RigidBodySet::RigidBodySet(const System& system, const vector<vector<int> >& exp
     for (int f = 0; f < system.getNumForces(); f++)
         if (dynamic_cast<const CMMotionRemover*>(&system.getForce(f)) != nullptr)
             hasCMMotionRemover = true;
-}
 
-void RigidBodySet::updateShapes(const vector<Vec3>& positions) {
-    static_assert(sizeof(Vec3) == 3 * sizeof(double), "Vec3 must be three packed doubles");
-    const double* data = reinterpret_cast<const double*>(positions.data());
-    for (int b = 0; b < (int) bodies.size(); b++) {
-        RigidBodyMath::BodyView body = view(b);
-        Eigen::Vector3d center = RigidBodyMath::centerOfMass(body, data);
-        linear[b] = RigidBodyMath::isLinearShape(RigidBodyMath::secondMoment(body, data, center));
+    // FNV-1a hash of, for each particle, the smallest index in its body, or -1.
+    vector<int32_t> representative(numParticles, -1);
+    for (const vector<int>& body : bodies) {
+        int smallest = *std::min_element(body.begin(), body.end());
+        for (int particle : body)
+            representative[particle] = smallest;
+    }
+    signature = 14695981039346656037ULL;
+    const unsigned char* bytes = reinterpret_cast<const unsigned char*>(representative.data());
+    for (size_t i = 0; i < representative.size() * sizeof(int32_t); i++) {
+        signature ^= bytes[i];
+        signature *= 1099511628211ULL;
     }
 }
 
-int RigidBodySet::getNumDegreesOfFreedom() const {
-    int dof = 3 * (int) freeParticles.size() - (int) freeConstraints.size();
-    for (char isLinearBody : linear)
-        dof += isLinearBody ? 5 : 6;
+int RigidBodyTopology::getNumDegreesOfFreedom(int numLinearBodies) const {
+    int dof = 3 * (int) freeParticles.size() - (int) freeConstraints.size() + 6 * (int) bodies.size() - numLinearBodies;
     if (hasCMMotionRemover)
         dof -= 3;
     return dof;

@@ -1,27 +1,29 @@
-#ifndef MRATTLE_RIGID_BODY_SET_H_
-#define MRATTLE_RIGID_BODY_SET_H_
+#ifndef MRATTLE_RIGID_BODY_TOPOLOGY_H_
+#define MRATTLE_RIGID_BODY_TOPOLOGY_H_
 
-#include "mrattle/RigidBodyMath.h"
 #include "openmm/System.h"
 #include "openmm/Vec3.h"
 #include "internal/windowsExportMRattle.h"
+#include <cstdint>
 #include <vector>
 
 namespace MRattlePlugin {
 
 /**
- * The one home of rigid-body bookkeeping, shared by every rigid-body integrator and
- * kernel: which particles form each body, which particles are free, which constraints
- * must still be enforced, the body shapes (linear or not) and the degrees of freedom.
+ * The one home of rigid-body topology, shared by every rigid-body integrator and kernel:
+ * which particles form each body, which particles are free, which constraints must still
+ * be enforced, the masses and the degrees of freedom. It is fixed once an integrator is
+ * bound to a Context; the integrator hands a copy to its kernel. What depends on the
+ * configuration (whether a body is linear) lives in the kernel.
  *
  * Body semantics: with no explicit bodies, every molecule (OpenMM's connected components
  * of bonds and constraints) with two or more massive, non-virtual particles is a body.
  * With explicit bodies, only those are rigid. A body of one particle is a free particle.
  * Virtual sites and massless particles are never body members.
  */
-class OPENMM_EXPORT_MRATTLE RigidBodySet {
+class OPENMM_EXPORT_MRATTLE RigidBodyTopology {
 public:
-    RigidBodySet() = default;
+    RigidBodyTopology() = default;
     /**
      * Resolve the bodies of a System. Throws OpenMMException naming the body and
      * particle for: an index out of range, a particle listed twice, a massless particle
@@ -31,7 +33,7 @@ public:
      * @param explicitBodies  bodies added to the integrator (empty: use the molecules)
      * @param molecules       the System's molecules, as ContextImpl::getMolecules()
      */
-    RigidBodySet(const OpenMM::System& system, const std::vector<std::vector<int> >& explicitBodies,
+    RigidBodyTopology(const OpenMM::System& system, const std::vector<std::vector<int> >& explicitBodies,
                  const std::vector<std::vector<int> >& molecules);
 
     /** Check one explicit body on its own (at addRigidBody time): not empty, no negative index, no repeat. */
@@ -49,21 +51,20 @@ public:
     /** Number of System constraints with both ends in one body (ignored: redundant). */
     int getNumIgnoredConstraints() const { return ignoredConstraints; }
     double getBodyMass(int body) const { return bodyMass[body]; }
-    bool isLinear(int body) const { return linear[body] != 0; }
     /** True if the System has a CMMotionRemover (it removes 3 degrees of freedom). */
     bool removesCenterOfMassMotion() const { return hasCMMotionRemover; }
 
-    /** Classify each body's shape (linear or not) from the given positions. */
-    void updateShapes(const std::vector<OpenMM::Vec3>& positions);
-
-    /** 6 per body (5 if linear), 3 per free particle, minus free constraints, minus 3 with a CMMotionRemover. */
-    int getNumDegreesOfFreedom() const;
-
-    /** The numerical core's view of one body. */
-    RigidBodyMath::BodyView view(int body) const {
-        return RigidBodyMath::BodyView{bodies[body].data(), (int) bodies[body].size(), masses.data(),
-                                       bodyMass[body], linear[body] != 0};
-    }
+    /**
+     * 6 per body (5 for each of numLinearBodies linear ones), 3 per free particle, minus
+     * free constraints, minus 3 with a CMMotionRemover.
+     */
+    int getNumDegreesOfFreedom(int numLinearBodies) const;
+    /**
+     * A hash of the partition of particles into bodies, the same whatever order the bodies
+     * or their members were listed in: checkpoints carry it so that one written with other
+     * bodies is refused.
+     */
+    uint64_t getSignature() const { return signature; }
     /** Particle masses, indexed by particle. */
     const std::vector<double>& getMasses() const { return masses; }
 
@@ -74,9 +75,9 @@ private:
     std::vector<int> freeConstraints;
     std::vector<double> masses;
     std::vector<double> bodyMass;
-    std::vector<char> linear;
     int ignoredConstraints = 0;
     bool hasCMMotionRemover = false;
+    uint64_t signature = 0;
 };
 
 } // namespace MRattlePlugin
