@@ -8,7 +8,6 @@
  *
  *     benzene_cluster [steps=5000] [step size in fs=2] [platform=CPU]
  */
-#include "MRattleBuildInfo.h"
 #include "MRattleIntegrator.h"
 #include "OpenMM.h"
 #include <chrono>
@@ -114,8 +113,11 @@ int main(int argc, char* argv[]) {
         return 2;
     }
     try {
-        // The platform plugins of the OpenMM this was built against, unless the user names others.
+#ifdef MRATTLE_OPENMM_PLUGIN_DIR
+        // Set by this project's CMake: the platform plugins of the OpenMM it was built
+        // against, unless the user names others.
         setenv("OPENMM_PLUGIN_DIR", MRATTLE_OPENMM_PLUGIN_DIR, 0);
+#endif
         Platform::loadPluginsFromDirectory(Platform::getDefaultPluginsDirectory());
         registerMRattleReferenceKernelFactories();
 
