@@ -1,56 +1,15 @@
 #include "RigidBodyIntegrator.h"
 #include "internal/OpenMMVersionCheck.h"
+#include "internal/RigidBodyCheckpointHeader.h"
 #include "internal/RigidBodyKernels.h"
 #include "openmm/CompoundIntegrator.h"
 #include "openmm/OpenMMException.h"
 #include "openmm/internal/ContextImpl.h"
 #include <cmath>
-#include <cstdint>
-#include <sstream>
 
 using namespace MRattlePlugin;
 using namespace OpenMM;
 using std::vector;
-
-namespace {
-
-// The integrator's part of a checkpoint (OpenMM writes it after the Context's own data):
-// magic, format version, the step kernel's name, the number of bodies in effect and their
-// signature, then the kernel's own state. Numbers are native-endian, like the rest of an
-// OpenMM checkpoint. Version 2: the kernel's state follows the header.
-const char CheckpointMagic[8] = {'M', 'R', 'a', 't', 't', 'l', 'e', 'C'};
-const int32_t CheckpointVersion = 2;
-const int32_t MaxKernelNameLength = 1024;
-
-template <class T>
-void writeValue(std::ostream& stream, T value) {
-    stream.write(reinterpret_cast<const char*>(&value), sizeof(T));
-}
-
-template <class T>
-T readValue(std::istream& stream, const char* what) {
-    T value;
-    stream.read(reinterpret_cast<char*>(&value), sizeof(T));
-    if (!stream || stream.gcount() != (std::streamsize) sizeof(T))
-        throw OpenMMException(std::string("the checkpoint is truncated (it ends before the ") + what + ")");
-    return value;
-}
-
-std::string hex(uint64_t value) {
-    std::ostringstream text;
-    text << "0x" << std::hex << value;
-    return text.str();
-}
-
-/** The header's kernel name, printable whatever bytes a damaged checkpoint holds. */
-std::string printable(const std::string& name) {
-    std::string text;
-    for (unsigned char c : name)
-        text += (c >= 32 && c < 127 ? std::string(1, (char) c) : "\\x" + hex(c).substr(2));
-    return text;
-}
-
-} // namespace
 
 RigidBodyIntegrator::RigidBodyIntegrator() {
     setConstraintTolerance(1e-5);
@@ -165,52 +124,14 @@ void RigidBodyIntegrator::stateChanged(State::DataType changed) {
 
 void RigidBodyIntegrator::createCheckpoint(std::ostream& stream) const {
     requireContext();
-    stream.write(CheckpointMagic, sizeof(CheckpointMagic));
-    writeValue<int32_t>(stream, CheckpointVersion);
-    const std::string kernelName = getStepKernelName();
-    writeValue<int32_t>(stream, kernelName.size());
-    stream.write(kernelName.data(), kernelName.size());
-    writeValue<int32_t>(stream, topology.getNumBodies());
-    writeValue<uint64_t>(stream, topology.getSignature());
+    RigidBodyCheckpointHeader::write(stream, getStepKernelName(), topology);
     kernel.getAs<const RigidBodyKernel>().createCheckpoint(*context, stream);
 }
 
 void RigidBodyIntegrator::loadCheckpoint(std::istream& stream) {
     requireContext();
     try {
-        char magic[sizeof(CheckpointMagic)];
-        stream.read(magic, sizeof(magic));
-        if (!stream || stream.gcount() != (std::streamsize) sizeof(magic))
-            throw OpenMMException("the checkpoint holds no rigid-body integrator data: it is truncated, or it was "
-                                  "written by a Context with a different integrator");
-        if (!std::equal(magic, magic + sizeof(magic), CheckpointMagic))
-            throw OpenMMException("the checkpoint's integrator data is not a rigid-body integrator's: it is malformed, "
-                                  "or it was written by a Context with a different integrator");
-        int32_t version = readValue<int32_t>(stream, "format version");
-        if (version != CheckpointVersion)
-            throw OpenMMException("the checkpoint's rigid-body integrator data has format version " +
-                                  std::to_string(version) + ", and this build of the plugin reads version " +
-                                  std::to_string(CheckpointVersion) + " only");
-        int32_t nameLength = readValue<int32_t>(stream, "integrator name");
-        if (nameLength < 0 || nameLength > MaxKernelNameLength)
-            throw OpenMMException("the checkpoint's rigid-body integrator data is malformed (integrator name of length " +
-                                  std::to_string(nameLength) + ")");
-        std::string kernelName(nameLength, ' ');
-        stream.read(&kernelName[0], nameLength);
-        if (!stream || stream.gcount() != nameLength)
-            throw OpenMMException("the checkpoint is truncated (it ends in the integrator name)");
-        if (kernelName != getStepKernelName())
-            throw OpenMMException("the checkpoint was written by an integrator using kernel '" + printable(kernelName) +
-                                  "', and this one uses '" + getStepKernelName() +
-                                  "': use saveState()/loadState() to change integrators");
-        int32_t numBodies = readValue<int32_t>(stream, "number of rigid bodies");
-        uint64_t signature = readValue<uint64_t>(stream, "rigid-body signature");
-        if (numBodies != topology.getNumBodies() || signature != topology.getSignature())
-            throw OpenMMException("the checkpoint was written with " + std::to_string(numBodies) +
-                                  " rigid bodies in effect (signature " + hex(signature) + "), and this Context has " +
-                                  std::to_string(topology.getNumBodies()) + " (signature " + hex(topology.getSignature()) +
-                                  "): the bodies differ, so the System or the bodies declared with addRigidBody() are not "
-                                  "those the checkpoint was written with");
+        RigidBodyCheckpointHeader::check(stream, getStepKernelName(), topology);
         kernel.getAs<RigidBodyKernel>().loadCheckpoint(*context, stream);
     } catch (const OpenMMException& e) {
         // OpenMM has already overwritten positions, velocities, time, box and parameters.
