@@ -1,8 +1,11 @@
 /*
- * The CPU platform runs the same physics as Reference. Its nonbonded forces are single
- * precision, so trajectories part at round-off and drift apart; the test holds M-RATTLE's
- * CPU-vs-Reference difference to what OpenMM's own VerletIntegrator shows on the same
- * System from the same start.
+ * Every platform runs the same physics as Reference, with every rigid-body integrator.
+ * The CPU platform's nonbonded forces are single precision, so trajectories part at
+ * round-off and drift apart; the test holds the integrator's CPU-vs-Reference difference
+ * to what OpenMM's own VerletIntegrator shows on the same System from the same start.
+ *
+ * PlatformAgreement runs for every config whose platform is not Reference (each compared
+ * with Reference, with the same integrator); Platforms for every config (allConfigs()).
  */
 #include "TestSupport.h"
 #include <gtest/gtest.h>
@@ -16,7 +19,6 @@ using std::vector;
 
 namespace {
 
-
 /** Positions after the steps from the given start, on one platform. */
 vector<Vec3> finalPositions(const Cluster& c, Integrator& integrator, const std::string& platformName,
                             const State& start, int steps) {
@@ -27,47 +29,61 @@ vector<Vec3> finalPositions(const Cluster& c, Integrator& integrator, const std:
     return context.getState(State::Positions).getPositions();
 }
 
+/** Every config but those on Reference: each is compared with Reference. */
+vector<Config> nonReferenceConfigs() {
+    vector<Config> configs;
+    for (const Config& config : allConfigs())
+        if (config.platform != "Reference")
+            configs.push_back(config);
+    return configs;
+}
+
+class PlatformAgreement : public RigidBodyTest {};
+class Platforms : public RigidBodyTest {};
+
 } // namespace
 
-TEST(Platforms, CpuAgreesWithReferenceAsVerletDoes) {
+TEST_P(PlatformAgreement, AgreesWithReferenceAsVerletDoes) {
+    const std::string name = GetParam().platform;
     Cluster c = buildCluster(benzene(), 2, 0.65, 4);
     const double stepSize = 0.001;
     const int steps = 200;
     // One rigid start for everything.
-    MRattleIntegrator setup(stepSize);
-    Context setupContext(*c.system, setup, platform("Reference"));
+    std::unique_ptr<RigidBodyIntegrator> setup = makeIntegrator(stepSize);
+    Context setupContext(*c.system, *setup, platform("Reference"));
     setupContext.setPositions(c.positions);
     setupContext.setVelocitiesToTemperature(300, 2);
     State start = setupContext.getState(State::Positions | State::Velocities);
 
-    MRattleIntegrator mrattleReference(stepSize), mrattleCpu(stepSize);
-    vector<Vec3> a = finalPositions(c, mrattleReference, "Reference", start, steps);
-    vector<Vec3> b = finalPositions(c, mrattleCpu, "CPU", start, steps);
-    VerletIntegrator verletReference(stepSize), verletCpu(stepSize);
+    std::unique_ptr<RigidBodyIntegrator> rigidReference = makeIntegrator(stepSize), rigidOther = makeIntegrator(stepSize);
+    vector<Vec3> a = finalPositions(c, *rigidReference, "Reference", start, steps);
+    vector<Vec3> b = finalPositions(c, *rigidOther, name, start, steps);
+    VerletIntegrator verletReference(stepSize), verletOther(stepSize);
     vector<Vec3> va = finalPositions(c, verletReference, "Reference", start, steps);
-    vector<Vec3> vb = finalPositions(c, verletCpu, "CPU", start, steps);
-    const double mrattle = maxDeviation(a, b), verlet = maxDeviation(va, vb);
-    std::cout << "CPU vs Reference after " << steps << " steps: M-RATTLE " << mrattle << " nm, VerletIntegrator "
-              << verlet << " nm; M-RATTLE rigidity on CPU " << maxDistanceChange(start.getPositions(), b, c.molecules)
-              << " nm" << std::endl;
+    vector<Vec3> vb = finalPositions(c, verletOther, name, start, steps);
+    const double rigid = maxDeviation(a, b), verlet = maxDeviation(va, vb);
+    std::cout << name << " vs Reference after " << steps << " steps: " << GetParam().integrator << " " << rigid
+              << " nm, VerletIntegrator " << verlet << " nm; rigidity on " << name << " "
+              << maxDistanceChange(start.getPositions(), b, c.molecules) << " nm" << std::endl;
     EXPECT_GT(maxDeviation(start.getPositions(), a), 1e-2);  // the molecules moved
-    EXPECT_GT(mrattle, 0.0);  // the CPU platform's own forces were used
-    EXPECT_LT(mrattle, 5 * verlet);
-    EXPECT_LT(mrattle, 1e-4);
+    EXPECT_GT(rigid, 0.0);  // the platform's own forces were used
+    EXPECT_LT(rigid, 5 * verlet);
+    EXPECT_LT(rigid, 1e-4);
     EXPECT_LT(maxDistanceChange(start.getPositions(), b, c.molecules), 1e-12);
 }
 
-TEST(Platforms, CpuBodySemanticsMatchReference) {
+TEST_P(Platforms, BodySemanticsMatchReference) {
     Cluster c = buildCluster(tetrahedral(), 2, 0.45, 5);
     c.system->addForce(new CMMotionRemover());
-    for (const std::string name : {"Reference", "CPU"}) {
-        MRattleIntegrator integrator(0.002);
-        Context context(*c.system, integrator, platform(name), platformProperties(name));
-        context.setPositions(c.positions);
-        context.setVelocitiesToTemperature(300, 3);
-        EXPECT_EQ(c.molecules, integrator.getBodiesInEffect());
-        EXPECT_EQ(8 * 6 - 3, integrator.getNumDegreesOfFreedom());
-        integrator.step(100);
-        EXPECT_LT(maxDistanceChange(c.positions, context.getState(State::Positions).getPositions(), c.molecules), 1e-12);
-    }
+    std::unique_ptr<RigidBodyIntegrator> integrator = makeIntegrator(0.002);
+    std::unique_ptr<Context> context = makeContext(*c.system, *integrator);
+    context->setPositions(c.positions);
+    context->setVelocitiesToTemperature(300, 3);
+    EXPECT_EQ(c.molecules, integrator->getBodiesInEffect());
+    EXPECT_EQ(8 * 6 - 3, integrator->getNumDegreesOfFreedom());
+    integrator->step(100);
+    EXPECT_LT(maxDistanceChange(c.positions, context->getState(State::Positions).getPositions(), c.molecules), 1e-12);
 }
+
+INSTANTIATE_TEST_SUITE_P(AllConfigs, Platforms, ::testing::ValuesIn(allConfigs()), configName);
+INSTANTIATE_TEST_SUITE_P(NonReference, PlatformAgreement, ::testing::ValuesIn(nonReferenceConfigs()), configName);

@@ -1,17 +1,21 @@
 /*
- * The splitting baseline (RigidSplittingIntegrator): rigidity, conservation on a free
- * asymmetric body, second-order energy error, convergence to M-RATTLE as h -> 0, linear
- * bodies, free-particle constraints, exact restarts, and the semantics it shares with
- * MRattleIntegrator.
+ * What is particular to the splitting baseline (RigidSplittingIntegrator): the rotor
+ * step's order, conservation on a free asymmetric body, second-order energy error,
+ * convergence to M-RATTLE as h -> 0, linear bodies, and an LJ cluster compared with
+ * M-RATTLE.
+ *
+ * What it promises like every rigid-body integrator (body semantics, rigidity over long
+ * runs, free-particle constraints, degrees of freedom and temperature, bad input such as a
+ * zero step size, the CPU platform, checkpoints) is checked by the value-parameterised
+ * suites (TestBodySemantics, TestBodyEnvironment, TestBadInput, TestPlatforms,
+ * TestCheckpoint, TestCompound), which run for every config in allConfigs().
  */
 #include "RigidSplittingIntegrator.h"
 #include "TestSupport.h"
 #include "mrattle/RigidBodyRotor.h"
-#include "openmm/reference/SimTKOpenMMRealType.h"
 #include <gtest/gtest.h>
 #include <algorithm>
 #include <cmath>
-#include <sstream>
 
 using namespace OpenMM;
 using namespace MRattlePlugin;
@@ -244,19 +248,6 @@ TEST(RigidSplitting, ConvergesToMRattleAsStepShrinks) {
     }
 }
 
-TEST(RigidSplitting, ClusterStaysRigid) {
-    SpringCluster c = springCluster();
-    RigidSplittingIntegrator integrator(0.002);
-    addBodies(integrator, c.bodies);
-    Context context(c.system, integrator, platform("Reference"));
-    context.setPositions(c.positions);
-    context.setVelocitiesToTemperature(300, 3);
-    integrator.step(2000);
-    vector<Vec3> x = context.getState(State::Positions).getPositions();
-    EXPECT_LT(maxDistanceChange(c.positions, x, c.bodies), 1e-10);
-    EXPECT_EQ(4 * 6, integrator.getNumDegreesOfFreedom());
-}
-
 TEST(RigidSplitting, LinearBodyHasFiveDegreesOfFreedomAndStaysOnItsLine) {
     // A CO2-like linear body tumbling freely, and an asymmetric body it is tied to by a spring.
     System system;
@@ -308,92 +299,6 @@ TEST(RigidSplitting, LinearBodyHasFiveDegreesOfFreedomAndStaysOnItsLine) {
     EXPECT_GT(worst, 0.0);
 }
 
-TEST(RigidSplitting, FreeParticleConstraintsAreKeptByRattle) {
-    // A constrained diatomic of free particles beside a rigid body.
-    SpringCluster c = springCluster();
-    int a = c.system.addParticle(14.0), b = c.system.addParticle(14.0);
-    c.positions.push_back(Vec3(0, 0, 0.8));
-    c.positions.push_back(Vec3(0.11, 0, 0.8));
-    c.system.addConstraint(a, b, 0.11);
-    HarmonicBondForce* tie = new HarmonicBondForce();
-    tie->addBond(0, a, 0.6, 100.0);
-    c.system.addForce(tie);
-    RigidSplittingIntegrator integrator(0.002);
-    integrator.setConstraintTolerance(1e-8);
-    addBodies(integrator, c.bodies);
-    Context context(c.system, integrator, platform("Reference"));
-    context.setPositions(c.positions);
-    context.setVelocitiesToTemperature(300, 5);
-    EXPECT_EQ(4 * 6 + 5, integrator.getNumDegreesOfFreedom());
-    integrator.step(500);
-    State s = context.getState(State::Positions | State::Velocities);
-    Vec3 d = s.getPositions()[b] - s.getPositions()[a];
-    double length = std::sqrt(d.dot(d));
-    EXPECT_NEAR(0.11, length, 1e-8);
-    Vec3 dv = s.getVelocities()[b] - s.getVelocities()[a];
-    EXPECT_LT(std::fabs(dv.dot(d) / length), 1e-6);
-    EXPECT_LT(maxDistanceChange(c.positions, s.getPositions(), c.bodies), 1e-10);
-}
-
-TEST(RigidSplitting, RestartFromCheckpointIsExact) {
-    SpringCluster c = springCluster();
-    RigidSplittingIntegrator integrator(0.002);
-    addBodies(integrator, c.bodies);
-    Context context(c.system, integrator, platform("Reference"));
-    context.setPositions(c.positions);
-    context.setVelocitiesToTemperature(300, 9);
-    integrator.step(50);
-    std::stringstream checkpoint;
-    context.createCheckpoint(checkpoint);
-    integrator.step(100);
-    State uninterrupted = context.getState(State::Positions | State::Velocities);
-    context.loadCheckpoint(checkpoint);
-    integrator.step(100);
-    State restarted = context.getState(State::Positions | State::Velocities);
-    for (int i = 0; i < c.system.getNumParticles(); i++)
-        for (int k = 0; k < 3; k++) {
-            EXPECT_EQ(uninterrupted.getPositions()[i][k], restarted.getPositions()[i][k]);
-            EXPECT_EQ(uninterrupted.getVelocities()[i][k], restarted.getVelocities()[i][k]);
-        }
-}
-
-TEST(RigidSplitting, SharesBodySemanticsWithMRattle) {
-    // Molecules as bodies when none is declared; same degrees of freedom and velocities.
-    Molecule mol = benzene();
-    System system;
-    for (int copy = 0; copy < 2; copy++)
-        for (double m : mol.masses)
-            system.addParticle(m);
-    HarmonicBondForce* bonds = new HarmonicBondForce();
-    vector<Vec3> positions;
-    for (int copy = 0; copy < 2; copy++) {
-        for (auto& p : mol.bonds)
-            bonds->addBond(p.first + 12 * copy, p.second + 12 * copy, 0.14, 1000.0);
-        for (const Vec3& s : mol.sites)
-            positions.push_back(s + Vec3(0, 0, 0.4 * copy));
-    }
-    system.addForce(bonds);
-    RigidSplittingIntegrator splitting(0.002);
-    MRattleIntegrator mrattle(0.002);
-    Context splittingContext(system, splitting, platform("Reference"));
-    Context mrattleContext(system, mrattle, platform("Reference"));
-    splittingContext.setPositions(positions);
-    mrattleContext.setPositions(positions);
-    EXPECT_EQ(2, splitting.getNumBodiesInEffect());
-    EXPECT_EQ(mrattle.getNumDegreesOfFreedom(), splitting.getNumDegreesOfFreedom());
-    splittingContext.setVelocitiesToTemperature(250, 4);
-    mrattleContext.setVelocitiesToTemperature(250, 4);
-    vector<Vec3> v1 = splittingContext.getState(State::Velocities).getVelocities();
-    vector<Vec3> v2 = mrattleContext.getState(State::Velocities).getVelocities();
-    EXPECT_EQ(0.0, maxDifference(v1, v2));
-    double ke = splittingContext.getState(State::Energy).getKineticEnergy();
-    EXPECT_NEAR(0.5 * 12 * BOLTZ * 250, ke, 1e-9);
-    // A bond-only planar molecule: intra-body forces do nothing, so the motion is free.
-    splitting.step(300);
-    vector<Vec3> x = splittingContext.getState(State::Positions).getPositions();
-    EXPECT_LT(maxDistanceChange(positions, x, splitting.getBodiesInEffect()), 1e-10);
-}
-
 TEST(RigidSplitting, LennardJonesClusterConservesEnergyLikeMRattle) {
     // 8 non-planar molecules with LJ and charges (molecules are the bodies): both
     // second-order integrators conserve energy to a similar, small fluctuation.
@@ -425,25 +330,4 @@ TEST(RigidSplitting, LennardJonesClusterConservesEnergyLikeMRattle) {
     EXPECT_GT(fluctuation[0], 0.0);
     EXPECT_LT(fluctuation[0], 10 * fluctuation[1]);
     EXPECT_LT(fluctuation[1], 10 * fluctuation[0]);
-}
-
-TEST(RigidSplitting, WorksOnCpuPlatform) {
-    SpringCluster c = springCluster();
-    RigidSplittingIntegrator integrator(0.002);
-    addBodies(integrator, c.bodies);
-    Context context(c.system, integrator, platform("CPU"));
-    context.setPositions(c.positions);
-    context.setVelocitiesToTemperature(300, 3);
-    integrator.step(200);
-    vector<Vec3> x = context.getState(State::Positions).getPositions();
-    EXPECT_LT(maxDistanceChange(c.positions, x, c.bodies), 1e-10);
-}
-
-TEST(RigidSplitting, RejectsBadStepSize) {
-    SpringCluster c = springCluster();
-    RigidSplittingIntegrator integrator(0.0);
-    addBodies(integrator, c.bodies);
-    Context context(c.system, integrator, platform("Reference"));
-    context.setPositions(c.positions);
-    EXPECT_THROW(integrator.step(1), OpenMMException);
 }
