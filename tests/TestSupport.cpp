@@ -9,6 +9,9 @@
 #include <random>
 
 extern "C" void registerMRattleReferenceKernelFactories();
+#ifdef MRATTLE_HAVE_OPENCL
+extern "C" void registerMRattleOpenCLKernelFactories();
+#endif
 
 using namespace OpenMM;
 using std::vector;
@@ -22,6 +25,13 @@ void loadPlugins() {
         setenv("OPENMM_PLUGIN_DIR", MRATTLE_OPENMM_PLUGIN_DIR, 0);
         Platform::loadPluginsFromDirectory(Platform::getDefaultPluginsDirectory());
         registerMRattleReferenceKernelFactories();
+#ifdef MRATTLE_HAVE_OPENCL
+        bool haveOpenCL = false;
+        for (int i = 0; i < Platform::getNumPlatforms(); i++)
+            haveOpenCL |= (Platform::getPlatform(i).getName() == "OpenCL");
+        if (haveOpenCL)
+            registerMRattleOpenCLKernelFactories();
+#endif
     });
 }
 
@@ -30,8 +40,26 @@ Platform& platform(const std::string& name) {
     return Platform::getPlatformByName(name);
 }
 
+namespace {
+
+bool havePlatform(const std::string& name) {
+    loadPlugins();
+    for (int i = 0; i < Platform::getNumPlatforms(); i++)
+        if (Platform::getPlatform(i).getName() == name)
+            return true;
+    return false;
+}
+
+} // namespace
+
 std::vector<Config> configsOf(const std::string& integrator) {
-    return {{"Reference", integrator}, {"CPU", integrator}};
+    std::vector<Config> configs = {{"Reference", integrator}, {"CPU", integrator}};
+#ifdef MRATTLE_HAVE_OPENCL
+    // M-RATTLE runs on OpenCL too (the splitting baseline does not).
+    if (integrator == "MRattle" && havePlatform("OpenCL"))
+        configs.push_back({"OpenCL", integrator});
+#endif
+    return configs;
 }
 
 std::vector<Config> allConfigs() {
@@ -39,6 +67,10 @@ std::vector<Config> allConfigs() {
     for (const Config& config : configsOf("RigidSplitting"))
         configs.push_back(config);
     return configs;
+}
+
+void PrintTo(const Config& config, std::ostream* out) {
+    *out << config.platform << "/" << config.integrator;
 }
 
 std::string configName(const ::testing::TestParamInfo<Config>& info) {
@@ -56,6 +88,8 @@ std::unique_ptr<MRattlePlugin::RigidBodyIntegrator> makeIntegrator(const std::st
 std::map<std::string, std::string> platformProperties(const std::string& name) {
     if (name == "CPU")
         return {{"Threads", "1"}};
+    if (name == "OpenCL")
+        return {{"Precision", "double"}};  // the generic suites hold every platform to Reference's tolerances
     return {};
 }
 

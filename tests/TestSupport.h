@@ -25,6 +25,8 @@ struct Config {
     std::string platform;    // "Reference", "CPU"
     std::string integrator;  // "MRattle", "RigidSplitting"
 };
+/** How GoogleTest prints a Config (in test names and failures). */
+void PrintTo(const Config& config, std::ostream* out);
 /** Every platform with the plugin's kernels, times every rigid-body integrator. */
 std::vector<Config> allConfigs();
 /** Every platform, with one integrator. */
@@ -33,7 +35,7 @@ std::vector<Config> configsOf(const std::string& integrator);
 std::string configName(const ::testing::TestParamInfo<Config>& info);
 /** The integrator of that kind. */
 std::unique_ptr<MRattlePlugin::RigidBodyIntegrator> makeIntegrator(const std::string& kind, double stepSize);
-/** Deterministic platform properties: one thread on CPU (several sum forces in varying order). */
+/** Platform properties of the tests: one thread on CPU (several sum forces in varying order), double precision on OpenCL. */
 std::map<std::string, std::string> platformProperties(const std::string& platform);
 
 /** The fixture of the generic suites. */

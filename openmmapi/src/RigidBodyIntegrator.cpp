@@ -138,10 +138,16 @@ void RigidBodyIntegrator::loadCheckpoint(std::istream& stream) {
         refusedCheckpoint = true;
         positionsSetSinceRefusal = velocitiesSetSinceRefusal = false;
         forcesAreValid = false;
+        const std::string platform = context->getPlatform().getName();
+        const std::string reinitialize =
+            (platform == "Reference" || platform == "CPU"
+                 ? ""
+                 : " (on the " + platform + " platform, which keeps charges and masses in the arrays a checkpoint "
+                   "overwrites, call Context::reinitialize() first)");
         throw OpenMMException(std::string("loadCheckpoint: ") + e.what() +
                               ". The Context now holds part of that checkpoint's data (OpenMM reads it before the "
-                              "integrator's part): set positions and velocities again, or load a checkpoint that fits, "
-                              "before stepping");
+                              "integrator's part): set positions and velocities again" + reinitialize +
+                              ", or load a checkpoint that fits, before stepping");
     }
     refusedCheckpoint = false;
 }

@@ -1,7 +1,7 @@
 """M-RATTLE rigid-body integrators for OpenMM.
 
 ``import mrattle`` registers the plugin's kernels with OpenMM's Reference and CPU
-platforms, so ``mrattle.MRattleIntegrator`` can be used anywhere an OpenMM integrator
+platforms (and OpenCL, where the OpenCL kernels were built and OpenMM has that platform), so ``mrattle.MRattleIntegrator`` can be used anywhere an OpenMM integrator
 can::
 
     import mrattle
@@ -19,28 +19,41 @@ import openmm as _openmm
 from . import _plugin_location
 
 
-def _loadKernelPlugin():
-    """Load the kernel plugin (Reference and CPU kernels) unless OpenMM already did."""
-    path = _os.path.normpath(_os.path.join(_os.path.dirname(_os.path.abspath(__file__)),
-                                           _plugin_location.PLUGIN_PATH))
+def _loadKernelPlugin(relativePath, required):
+    """Load a kernel plugin unless OpenMM already did (an install into its plugin folder)."""
+    path = _os.path.normpath(_os.path.join(_os.path.dirname(_os.path.abspath(__file__)), relativePath))
     # Installed into OpenMM's own plugin folder, 'import openmm' has loaded it already:
     # registering the kernels twice would be harmless but wasteful.
     loaded = getattr(_openmm, 'pluginLoadedLibNames', [])
     if any(_os.path.realpath(name) == _os.path.realpath(path) for name in loaded):
         return path
     if not _os.path.isfile(path):
+        if not required:
+            return None
         raise ImportError("mrattle: the kernel plugin is missing: expected %s" % path)
     try:
         _openmm.Platform.loadPluginLibrary(path)
     except Exception as error:
+        if not required:
+            import warnings
+            warnings.warn("mrattle: OpenMM could not load the OpenCL kernels %s (%s); MRattleIntegrator runs on "
+                          "Reference and CPU only" % (path, error))
+            return None
         raise ImportError("mrattle: OpenMM could not load the kernel plugin %s: %s" % (path, error)) from error
     return path
+
+
+def _hasPlatform(name):
+    return any(_openmm.Platform.getPlatform(i).getName() == name for i in range(_openmm.Platform.getNumPlatforms()))
 
 
 # The SWIG module first: it loads libMRattlePlugin.so, which the kernel plugin needs.
 from .integrators import RigidBodyIntegrator, MRattleIntegrator, RigidSplittingIntegrator
 
-PLUGIN_PATH = _loadKernelPlugin()
+PLUGIN_PATH = _loadKernelPlugin(_plugin_location.PLUGIN_PATH, required=True)
+#: The OpenCL kernel plugin, or None where it was not built or OpenMM has no OpenCL platform.
+OPENCL_PLUGIN_PATH = (_loadKernelPlugin(_plugin_location.OPENCL_PLUGIN_PATH, required=False)
+                      if _plugin_location.OPENCL_PLUGIN_PATH and _hasPlatform('OpenCL') else None)
 
 from .reporters import StateDataReporter, degreesOfFreedom, kineticTemperature
 from .interactions import removeIntraBodyInteractions
@@ -51,4 +64,5 @@ _installXmlSerializerHooks()
 
 
 __all__ = ['RigidBodyIntegrator', 'MRattleIntegrator', 'RigidSplittingIntegrator', 'StateDataReporter', 'degreesOfFreedom',
-           'kineticTemperature', 'removeIntraBodyInteractions', 'asPluginIntegrator', 'models', 'PLUGIN_PATH']
+           'kineticTemperature', 'removeIntraBodyInteractions', 'asPluginIntegrator', 'models', 'PLUGIN_PATH',
+           'OPENCL_PLUGIN_PATH']

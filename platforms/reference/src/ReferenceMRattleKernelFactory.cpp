@@ -18,11 +18,14 @@ KernelImpl* ReferenceMRattleKernelFactory::createKernelImpl(std::string name, co
     throw OpenMMException("ReferenceMRattleKernelFactory: no kernel named '" + name + "'");
 }
 
-extern "C" OPENMM_EXPORT void registerPlatforms() {
-}
+namespace {
 
-/** OpenMM's plugin entry point: register the kernels on every Reference-derived platform present. */
-extern "C" OPENMM_EXPORT void registerKernelFactories() {
+/**
+ * Register the kernels on every Reference-derived platform present. File-local: every
+ * plugin exports a registerKernelFactories(), and a call to that name could bind to
+ * another plugin's.
+ */
+void registerOnReferenceAndCpu() {
     checkOpenMMVersion(Platform::getOpenMMVersion());
     for (int i = 0; i < Platform::getNumPlatforms(); i++) {
         Platform& platform = Platform::getPlatform(i);
@@ -35,6 +38,17 @@ extern "C" OPENMM_EXPORT void registerKernelFactories() {
     }
 }
 
+} // namespace
+
+extern "C" OPENMM_EXPORT void registerPlatforms() {
+}
+
+/** OpenMM's plugin entry point. */
+extern "C" OPENMM_EXPORT void registerKernelFactories() {
+    registerOnReferenceAndCpu();
+}
+
+/** For programs that link the plugin instead of loading it from OpenMM's plugin folder. */
 extern "C" OPENMM_EXPORT void registerMRattleReferenceKernelFactories() {
-    registerKernelFactories();
+    registerOnReferenceAndCpu();
 }
