@@ -143,6 +143,29 @@ DEVICE void recordFailure(GLOBAL int* RESTRICT failure, int step) {
 }
 
 /**
+ * A body's centre of mass relative to its first atom (origin) and its mean velocity, from
+ * velocities whose .w is the inverse mass. Positions relative to the first atom keep their
+ * digits however far the body is from the origin.
+ */
+DEVICE void bodyCenterAndVelocity(int start, int end, GLOBAL const int* RESTRICT bodyAtoms,
+        GLOBAL const real4* RESTRICT posq, GLOBAL const real4* RESTRICT posqCorrection,
+        GLOBAL const mixed4* RESTRICT velocities, mixed3* origin, mixed3* center, mixed3* meanVelocity) {
+    *origin = loadPosition(posq, posqCorrection, bodyAtoms[start]);
+    mixed totalMass = 0;
+    mixed3 weighted = make_mixed3(0, 0, 0), momentum = make_mixed3(0, 0, 0);
+    for (int k = start; k < end; k++) {
+        const int atom = bodyAtoms[k];
+        const mixed4 v = velocities[atom];
+        const mixed m = 1/v.w;
+        totalMass += m;
+        weighted += m*(loadPosition(posq, posqCorrection, atom) - *origin);
+        momentum += m*make_mixed3(v.x, v.y, v.z);
+    }
+    *center = weighted*(1/totalMass);
+    *meanVelocity = momentum*(1/totalMass);
+}
+
+/**
  * First half, per atom: half kick and drift into newVelocity and posDelta (the state
  * itself is written only by applyPositionStep, once every body's reset has succeeded).
  */
@@ -182,20 +205,8 @@ KERNEL void resetBodies(int numBodies, GLOBAL const int* RESTRICT bodyStart, GLO
     const mixed h = dt[0].y;
     for (int body = GLOBAL_ID; body < numBodies; body += GLOBAL_SIZE) {
         const int start = bodyStart[body], end = bodyStart[body+1];
-        const mixed3 origin = loadPosition(posq, posqCorrection, bodyAtoms[start]);
-        mixed totalMass = 0;
-        mixed3 center = make_mixed3(0, 0, 0), momentum = make_mixed3(0, 0, 0);
-        for (int k = start; k < end; k++) {
-            const int atom = bodyAtoms[k];
-            const mixed4 v = newVelocity[atom];
-            const mixed m = 1/v.w;
-            const mixed3 x = loadPosition(posq, posqCorrection, atom) - origin;
-            totalMass += m;
-            center += m*x;
-            momentum += m*make_mixed3(v.x, v.y, v.z);
-        }
-        center *= 1/totalMass;
-        const mixed3 V = momentum*(1/totalMass);
+        mixed3 origin, center, V;
+        bodyCenterAndVelocity(start, end, bodyAtoms, posq, posqCorrection, newVelocity, &origin, &center, &V);
         Matrix3 delta = zeroMatrix();
         bool converged = true;
         if (bodyLinear[body] == 0) {
@@ -385,19 +396,8 @@ KERNEL void projectBodies(int numBodies, GLOBAL const int* RESTRICT bodyStart, G
     for (int body = GLOBAL_ID; body < numBodies; body += GLOBAL_SIZE) {
         const int start = bodyStart[body], end = bodyStart[body+1];
         for (int pass = (collide ? 0 : 1); pass < 2; pass++) {
-            const mixed3 origin = loadPosition(posq, posqCorrection, bodyAtoms[start]);
-            mixed totalMass = 0;
-            mixed3 center = make_mixed3(0, 0, 0), momentum = make_mixed3(0, 0, 0);
-            for (int k = start; k < end; k++) {
-                const int atom = bodyAtoms[k];
-                const mixed4 v = velm[atom];
-                const mixed m = 1/v.w;
-                totalMass += m;
-                center += m*(loadPosition(posq, posqCorrection, atom) - origin);
-                momentum += m*make_mixed3(v.x, v.y, v.z);
-            }
-            center *= 1/totalMass;
-            const mixed3 V = momentum*(1/totalMass);
+            mixed3 origin, center, V;
+            bodyCenterAndVelocity(start, end, bodyAtoms, posq, posqCorrection, velm, &origin, &center, &V);
             Matrix3 J = zeroMatrix();
             mixed3 L = make_mixed3(0, 0, 0), u = make_mixed3(1, 0, 0);
             mixed farthest = -1;
