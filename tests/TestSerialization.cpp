@@ -229,8 +229,8 @@ TEST(Serialization, RefusesMalformedSettings) {
         size_t end = changed.find('"', start + name.size() + 2);
         return changed.replace(start, end + 1 - start, name + "=\"" + value + "\"");
     };
-    expectRefused(withAttribute("stepSize", "fast"), {"'stepSize'", "finite number", "fast"});
-    expectRefused(withAttribute("stepSize", "nan"), {"'stepSize'", "finite number"});
+    expectRefused(withAttribute("stepSize", "fast"), {"'stepSize'", "finite decimal number", "fast"});
+    expectRefused(withAttribute("stepSize", "nan"), {"'stepSize'", "finite decimal number"});
     expectRefused(withAttribute("stepSize", "0.002ps"), {"'stepSize'"});
     expectRefused(withAttribute("constraintTolerance", "-1e-5"), {"constraint tolerance must be positive"});
     expectRefused(withAttribute("integrationForceGroups", "1.5"), {"'integrationForceGroups'", "integer"});

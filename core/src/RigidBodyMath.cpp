@@ -66,8 +66,8 @@ RotationSolve solveLinearRotation(const BodyView& body, const double* oldPositio
     }
     double uw = u.dot(w);
     double discriminant = uw * uw - w.squaredNorm() + j * j;
-    if (discriminant < 0)
-        return result;  // no rotation satisfies the condition: step far too large
+    if (!(discriminant >= 0) || !std::isfinite(discriminant))
+        return result;  // no rotation satisfies the condition (step far too large), or not finite
     Vector3d p = (w + (-uw + std::sqrt(discriminant)) * u) / j;
     p.normalize();
     double c = u.dot(p);
@@ -130,6 +130,12 @@ Matrix3d cayleyMinusIdentity(const Vector3d& d) {
 }
 
 } // namespace
+
+Shape classifyShape(const Matrix3d& secondMoment, double totalMass) {
+    if (!(secondMoment.trace() > 1e-20 * totalMass))
+        return Shape::Point;
+    return isLinearShape(secondMoment) ? Shape::Linear : Shape::General;
+}
 
 Matrix3d rotationFromVector(const Vector3d& d) {
     return Matrix3d::Identity() + rotationMinusIdentity(d);
@@ -224,6 +230,8 @@ RotationSolve driftAndResetBody(const BodyView& body, double stepSize, const dou
     for (int k = 0; k < body.numAtoms; k++)
         momentum += body.masses[body.atoms[k]] * point(velocities, body.atoms[k]);
     const Vector3d V = momentum / body.totalMass;
+    if (!V.allFinite() || !center.allFinite())
+        return RotationSolve();  // not converged: nothing is written
     // The drift moves atom i by h v_i; relative to the centres that is h (v_i - V).
     RotationSolve solve = solveBodyRotation(body, positions, center, [&](int atom) -> Vector3d {
         return stepSize * (point(velocities, atom) - V);

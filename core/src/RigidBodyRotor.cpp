@@ -52,7 +52,7 @@ Matrix3d freeRotorStep(const Vector3d& moments, Vector3d& bodyMomentum, double h
     return rotation;
 }
 
-void positionStep(const RigidBodyMath::BodyView& body, const double* positions, const double* velocities,
+bool positionStep(const RigidBodyMath::BodyView& body, const double* positions, const double* velocities,
                   const double* forces, double h, double* newPositions, double* newVelocities) {
     // One pass for the centre and total momentum/force, one for J, L and the torque.
     Vector3d massPosition = Vector3d::Zero(), momentum = Vector3d::Zero(), force = Vector3d::Zero();
@@ -80,6 +80,17 @@ void positionStep(const RigidBodyMath::BodyView& body, const double* positions, 
     const Vector3d centerVelocity = momentum / body.totalMass;
     const Vector3d newCenter = center + h * centerVelocity;
 
+    // A point (all atoms at the centre) has no rotation: it only translates.
+    if (RigidBodyMath::classifyShape(J, body.totalMass) == RigidBodyMath::Shape::Point) {
+        if (!newCenter.allFinite() || !centerVelocity.allFinite())
+            return false;
+        for (int k = 0; k < body.numAtoms; k++) {
+            const int atom = body.atoms[k];
+            point(newPositions, atom) = newCenter + (point(positions, atom) - center);
+            point(newVelocities, atom) = centerVelocity;
+        }
+        return true;
+    }
     // Free rotor in the principal frame Q: Pi = Q^T L, Q -> Q R, so a_i -> S a_i with S = Q R Q^T.
     const PrincipalFrame frame = principalFrame(J);
     Vector3d bodyMomentum = frame.axes.transpose() * angularMomentum;
@@ -91,12 +102,18 @@ void positionStep(const RigidBodyMath::BodyView& body, const double* positions, 
         if (frame.moments(k) > 0 && !(body.linear && k == 0))
             bodyOmega(k) = bodyMomentum(k) / frame.moments(k);
     const Vector3d omega = newAxes * bodyOmega;
+    // Refuse what the exact rotations would integrate without complaint but wrongly: values
+    // that are not finite, and a turn of more than a quarter in one step.
+    if (!newCenter.allFinite() || !omega.allFinite() || !spaceRotation.allFinite() ||
+        std::fabs(h) * omega.norm() > MaxRotationPerStep)
+        return false;
     for (int k = 0; k < body.numAtoms; k++) {
         const int atom = body.atoms[k];
         const Vector3d a = spaceRotation * (point(positions, atom) - center);
         point(newPositions, atom) = newCenter + a;
         point(newVelocities, atom) = centerVelocity + omega.cross(a);
     }
+    return true;
 }
 
 } // namespace RigidBodyRotor

@@ -45,6 +45,13 @@ public:
     /** The body topology in effect (throws if not bound). */
     const RigidBodyTopology& getTopology() const;
     /**
+     * Set the step size in picoseconds. Refuses a number that is not finite; zero can be
+     * set (as the constructor's argument), but step() refuses it.
+     */
+    void setStepSize(double size) override;
+    /** Set the constraint tolerance (free-particle constraints); refuses anything but a finite positive number. */
+    void setConstraintTolerance(double tolerance) override;
+    /**
      * Advance the simulation: every step updates the Context's state (CMMotionRemover,
      * thermostats, barostats), then the kernel takes the step.
      *

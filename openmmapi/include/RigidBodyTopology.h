@@ -48,6 +48,8 @@ public:
     const std::vector<int>& getFreeParticles() const { return freeParticles; }
     /** Indices of the System's constraints between free particles (enforced RATTLE-style). */
     const std::vector<int>& getFreeConstraints() const { return freeConstraints; }
+    /** Number of System constraints between two massless particles (OpenMM ignores them, and so does this). */
+    int getNumMasslessConstraints() const { return masslessConstraints; }
     /** Number of System constraints with both ends in one body (ignored: redundant). */
     int getNumIgnoredConstraints() const { return ignoredConstraints; }
     double getBodyMass(int body) const { return bodyMass[body]; }
@@ -55,10 +57,11 @@ public:
     bool removesCenterOfMassMotion() const { return hasCMMotionRemover; }
 
     /**
-     * 6 per body (5 for each of numLinearBodies linear ones), 3 per free particle, minus
-     * free constraints, minus 3 with a CMMotionRemover.
+     * The bodies' degrees of freedom (bodyDegreesOfFreedom: 6 per body, 5 if linear, 3 if
+     * its atoms coincide; the kernel knows the shapes), plus 3 per free particle, minus free
+     * constraints, minus 3 with a CMMotionRemover.
      */
-    int getNumDegreesOfFreedom(int numLinearBodies) const;
+    int getNumDegreesOfFreedom(int bodyDegreesOfFreedom) const;
     /**
      * A hash of the partition of particles into bodies, the same whatever order the bodies
      * or their members were listed in: checkpoints carry it so that one written with other
@@ -76,6 +79,7 @@ private:
     std::vector<double> masses;
     std::vector<double> bodyMass;
     int ignoredConstraints = 0;
+    int masslessConstraints = 0;
     bool hasCMMotionRemover = false;
     uint64_t signature = 0;
 };

@@ -15,6 +15,20 @@ RigidBodyIntegrator::RigidBodyIntegrator() {
     setConstraintTolerance(1e-5);
 }
 
+void RigidBodyIntegrator::setStepSize(double size) {
+    if (!std::isfinite(size))
+        throw OpenMMException("setStepSize: the step size must be a finite number of picoseconds, got " +
+                              std::to_string(size));
+    Integrator::setStepSize(size);
+}
+
+void RigidBodyIntegrator::setConstraintTolerance(double tolerance) {
+    if (!(tolerance > 0) || !std::isfinite(tolerance))
+        throw OpenMMException("setConstraintTolerance: the tolerance must be a finite positive number, got " +
+                              std::to_string(tolerance));
+    Integrator::setConstraintTolerance(tolerance);
+}
+
 int RigidBodyIntegrator::addRigidBody(const vector<int>& particles) {
     if (owner != nullptr)
         throw OpenMMException("addRigidBody: bodies cannot be added once the integrator is bound to a Context");
@@ -64,7 +78,7 @@ const vector<int>& RigidBodyIntegrator::getFreeParticles() const {
 }
 
 int RigidBodyIntegrator::getNumDegreesOfFreedom() const {
-    return getTopology().getNumDegreesOfFreedom(kernel.getAs<const RigidBodyKernel>().getNumLinearBodies());
+    return getTopology().getNumDegreesOfFreedom(kernel.getAs<const RigidBodyKernel>().getBodyDegreesOfFreedom());
 }
 
 void RigidBodyIntegrator::initialize(ContextImpl& contextRef) {

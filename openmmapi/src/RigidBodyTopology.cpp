@@ -100,7 +100,9 @@ RigidBodyTopology::RigidBodyTopology(const System& system, const vector<vector<i
         double distance;
         system.getConstraintParameters(c, p1, p2, distance);
         int b1 = bodyOfParticle[p1], b2 = bodyOfParticle[p2];
-        if (b1 == b2 && b1 != -1)
+        if (masses[p1] == 0.0 && masses[p2] == 0.0)
+            masslessConstraints++;
+        else if (b1 == b2 && b1 != -1)
             ignoredConstraints++;
         else if (b1 == -1 && b2 == -1)
             freeConstraints.push_back(c);
@@ -132,8 +134,8 @@ RigidBodyTopology::RigidBodyTopology(const System& system, const vector<vector<i
     }
 }
 
-int RigidBodyTopology::getNumDegreesOfFreedom(int numLinearBodies) const {
-    int dof = 3 * (int) freeParticles.size() - (int) freeConstraints.size() + 6 * (int) bodies.size() - numLinearBodies;
+int RigidBodyTopology::getNumDegreesOfFreedom(int bodyDegreesOfFreedom) const {
+    int dof = 3 * (int) freeParticles.size() - (int) freeConstraints.size() + bodyDegreesOfFreedom;
     if (hasCMMotionRemover)
         dof -= 3;
     return dof;

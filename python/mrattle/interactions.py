@@ -1,8 +1,10 @@
 """Removal of interactions that cannot affect rigid-body motion."""
+import math
 import re
 import xml.etree.ElementTree as ElementTree
 
 import openmm
+from openmm import unit
 
 from .integrators import RigidBodyIntegrator
 
@@ -21,6 +23,21 @@ _BONDED_TERMS = {
     'CustomCompoundBondForce': ('Bonds', 'Bond'),
 }
 _PARTICLE_ATTRIBUTE = re.compile(r'^(p|a|b)\d+$')
+
+
+def _checkFinitePositions(system, positions):
+    """The constraints are made at these positions' distances: refuse positions that are not finite numbers."""
+    if unit.is_quantity(positions):
+        positions = positions.value_in_unit(unit.nanometers)
+    if len(positions) != system.getNumParticles():
+        raise openmm.OpenMMException('removeIntraBodyInteractions: %d positions for a System of %d particles'
+                                     % (len(positions), system.getNumParticles()))
+    for i, position in enumerate(positions):
+        if unit.is_quantity(position):
+            position = position.value_in_unit(unit.nanometers)
+        if not all(math.isfinite(float(value)) for value in position):
+            raise openmm.OpenMMException('removeIntraBodyInteractions: the position of particle %d is not finite: %s'
+                                         % (i, tuple(position)))
 
 
 def removeIntraBodyInteractions(system, positions, bodies=None):
@@ -69,6 +86,7 @@ def removeIntraBodyInteractions(system, positions, bodies=None):
         the new System
     """
     bodyOfParticle = _bodyOfParticle(system, _resolveBodies(system, bodies))
+    _checkFinitePositions(system, positions)
 
     def inOneBody(particles):
         owner = bodyOfParticle.get(particles[0], -1)

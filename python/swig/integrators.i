@@ -103,6 +103,9 @@ static PyObject* intListToPython(const std::vector<int>& values) {
 #define OPENMM_EXPORT_MRATTLE
 /* The bookkeeping object is C++-only; its content is exposed by the integrator's queries. */
 %ignore MRattlePlugin::RigidBodyIntegrator::getTopology;
+/* OpenMM's own Python wrappers of these handle units; they reach the C++ overrides (which validate) virtually. */
+%ignore MRattlePlugin::RigidBodyIntegrator::setStepSize;
+%ignore MRattlePlugin::RigidBodyIntegrator::setConstraintTolerance;
 %include "RigidBodyIntegrator.h"
 
 /*

@@ -15,9 +15,14 @@ void fail(const string& typeName, const string& message) {
     throw OpenMMException(typeName + " XML: " + message);
 }
 
+/** The element's name for messages: OpenMM hands proxies the root element without its name. */
+string elementName(const SerializationNode& node) {
+    return "<" + (node.getName().empty() ? string("Integrator") : node.getName()) + ">";
+}
+
 const string& requireProperty(const SerializationNode& node, const string& name, const string& typeName) {
     if (!node.hasProperty(name))
-        fail(typeName, "the <" + node.getName() + "> element has no '" + name + "' attribute");
+        fail(typeName, "the " + elementName(node) + " element has no '" + name + "' attribute");
     return node.getStringProperty(name);
 }
 
@@ -28,17 +33,19 @@ long long parseInteger(const SerializationNode& node, const string& name, const 
     errno = 0;
     long long value = std::strtoll(text.c_str(), &end, 10);
     if (text.empty() || *end != '\0' || errno == ERANGE || value < INT32_MIN || value > INT32_MAX)
-        fail(typeName, "the '" + name + "' attribute of <" + node.getName() + "> must be an integer, found \"" + text +
+        fail(typeName, "the '" + name + "' attribute of " + elementName(node) + " must be an integer, found \"" + text +
                            "\"");
     return value;
 }
 
 double parseDouble(const SerializationNode& node, const string& name, const string& typeName) {
     const string& text = requireProperty(node, name, typeName);
+    // Decimal notation only: strtod also reads hexadecimal ("0x10" is 16), "inf" and "nan".
+    const bool decimal = !text.empty() && text.find_first_not_of("0123456789+-.eE") == string::npos;
     char* end = nullptr;
     double value = std::strtod(text.c_str(), &end);
-    if (text.empty() || *end != '\0' || !std::isfinite(value))
-        fail(typeName, "the '" + name + "' attribute of <" + node.getName() + "> must be a finite number, found \"" +
+    if (!decimal || *end != '\0' || !std::isfinite(value))
+        fail(typeName, "the '" + name + "' attribute of " + elementName(node) + " must be a finite decimal number, found \"" +
                            text + "\"");
     return value;
 }
@@ -71,7 +78,10 @@ int RigidBodyIntegratorSerialization::checkVersion(const SerializationNode& node
 }
 
 double RigidBodyIntegratorSerialization::getStepSize(const SerializationNode& node, const string& typeName) {
-    return parseDouble(node, "stepSize", typeName);
+    double stepSize = parseDouble(node, "stepSize", typeName);
+    if (stepSize == 0)
+        fail(typeName, "the step size must be nonzero, found \"" + node.getStringProperty("stepSize") + "\"");
+    return stepSize;
 }
 
 void RigidBodyIntegratorSerialization::deserialize(const SerializationNode& node, const string& typeName,
@@ -85,9 +95,12 @@ void RigidBodyIntegratorSerialization::deserialize(const SerializationNode& node
     const std::vector<SerializationNode>& children = node.getChildren();
     for (const SerializationNode& child : children)
         if (child.getName() != "RigidBodies")
-            fail(typeName, "unexpected element <" + child.getName() + "> in <" + node.getName() + ">");
+            fail(typeName, "unexpected element <" + child.getName() + "> in " + elementName(node));
     if (children.empty())
-        fail(typeName, "the <" + node.getName() + "> element has no <RigidBodies> element");
+        fail(typeName, "the " + elementName(node) + " element has no <RigidBodies> element");
+    if (children.size() > 1)
+        fail(typeName, "the " + elementName(node) + " element has " + std::to_string(children.size()) +
+                           " <RigidBodies> elements; it must have one");
     const SerializationNode& bodies = node.getChildNode("RigidBodies");
     const long long numBodies = parseInteger(bodies, "count", typeName);
     if (numBodies != (long long) bodies.getChildren().size())

@@ -139,7 +139,9 @@ def test_errors_are_python_exceptions():
         integrator.isBodyLinear(1)
     with pytest.raises(openmm.OpenMMException, match='bound'):
         integrator.addRigidBody([0, 1])
-    integrator.setStepSize(float('nan'))
+    with pytest.raises(openmm.OpenMMException, match='step size must be a finite'):
+        integrator.setStepSize(float('nan'))  # refused when set (issue 13), not at the next step
+    integrator.setStepSize(0)
     with pytest.raises(openmm.OpenMMException, match='step size'):
         integrator.step(1)
     with pytest.raises(openmm.OpenMMException, match='temperature'):

@@ -137,3 +137,13 @@ def test_virtual_sites_count_as_part_of_their_body():
     pairs = sorted(tuple(result['CustomNonbondedForce'].getExclusionParticles(i))
                    for i in range(result['CustomNonbondedForce'].getNumExclusions()))
     assert pairs == [(0, 1), (2, 3)]
+
+
+def test_positions_that_are_not_finite_are_refused():
+    model = mrattle.models.benzene()
+    positions = [openmm.Vec3(*p) for p in model.positions.value_in_unit(unit.nanometers)]
+    positions[3] = openmm.Vec3(float('nan'), 0, 0)
+    with pytest.raises(openmm.OpenMMException, match='position of particle 3 is not finite'):
+        mrattle.removeIntraBodyInteractions(model.system, positions)
+    with pytest.raises(openmm.OpenMMException, match='positions for a System'):
+        mrattle.removeIntraBodyInteractions(model.system, positions[:5])

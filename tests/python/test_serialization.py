@@ -94,3 +94,24 @@ def test_simulation_reads_the_integrator_from_an_xml_file(tmp_path):
     simulation.step(5)
     assert simulation.currentStep == 5
     assert simulation.integrator.getNumDegreesOfFreedom() == 27*6
+
+
+def test_duplicated_elements_and_non_decimal_numbers_are_refused():
+    integrator = mrattle.MRattleIntegrator(0.002)
+    integrator.addRigidBody([0, 1, 2])
+    xml = openmm.XmlSerializer.serialize(integrator)
+    start, end = xml.index('<RigidBodies'), xml.index('</RigidBodies>') + len('</RigidBodies>')
+    with pytest.raises(openmm.OpenMMException, match='2 <RigidBodies> elements'):
+        openmm.XmlSerializer.deserialize(xml[:end] + xml[start:end] + xml[end:])
+    for bad in ('0', '0x10', 'inf'):
+        with pytest.raises(openmm.OpenMMException, match='step size must be nonzero|finite decimal number'):
+            openmm.XmlSerializer.deserialize(xml.replace('stepSize=".002"', 'stepSize="%s"' % bad))
+
+
+def test_setters_refuse_values_that_are_not_finite():
+    integrator = mrattle.MRattleIntegrator(0.002)
+    with pytest.raises(openmm.OpenMMException, match='finite positive'):
+        integrator.setConstraintTolerance(float('nan'))
+    with pytest.raises(openmm.OpenMMException, match='finite'):
+        integrator.setStepSize(float('inf'))
+    assert integrator.getConstraintTolerance() == 1e-5

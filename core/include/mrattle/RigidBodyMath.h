@@ -48,6 +48,20 @@ Eigen::Matrix3d secondMoment(const BodyView& body, const double* positions, cons
  */
 bool isLinearShape(const Eigen::Matrix3d& secondMoment);
 
+/** What a body's shape allows: general (6 degrees of freedom), linear (5) or a point (3). */
+enum class Shape { General, Linear, Point };
+
+/**
+ * Classify a body from its second moment J and mass: a point if its atoms all lie within
+ * 1e-10 nm (rms) of its centre, else linear if isLinearShape(J), else general.
+ */
+Shape classifyShape(const Eigen::Matrix3d& secondMoment, double totalMass);
+
+/** Degrees of freedom of a body of that shape. */
+inline int degreesOfFreedom(Shape shape) {
+    return shape == Shape::General ? 6 : shape == Shape::Linear ? 5 : 3;
+}
+
 /** Rotation exp([d]x) by Rodrigues' formula (series near zero). */
 Eigen::Matrix3d rotationFromVector(const Eigen::Vector3d& d);
 

@@ -19,6 +19,9 @@
 namespace MRattlePlugin {
 namespace RigidBodyRotor {
 
+/** The largest turn of a body in one step that the splitting integrator accepts: a quarter turn. */
+constexpr double MaxRotationPerStep = 1.5707963267948966;
+
 /** Principal axes (columns, a proper rotation: body frame -> space frame) and moments, ascending. */
 struct PrincipalFrame {
     Eigen::Matrix3d axes;
@@ -54,8 +57,11 @@ Eigen::Matrix3d freeRotorStep(const Eigen::Vector3d& moments, Eigen::Vector3d& b
  * whose momentum and angular momentum are the half-kicked ones; a Cartesian half kick
  * followed by RigidBodyMath::projectBodyVelocities then completes the step exactly.
  * All arrays are 3N doubles indexed by global atom.
+ *
+ * @return false, with nothing written, if the result is not finite or the body would turn
+ *         by more than MaxRotationPerStep radians in the step (the step is too large)
  */
-void positionStep(const RigidBodyMath::BodyView& body, const double* positions, const double* velocities,
+bool positionStep(const RigidBodyMath::BodyView& body, const double* positions, const double* velocities,
                   const double* forces, double h, double* newPositions, double* newVelocities);
 
 } // namespace RigidBodyRotor

@@ -67,8 +67,8 @@ public:
     virtual double computeKineticEnergy(OpenMM::ContextImpl& context) = 0;
     /** Whether body number index is linear (collinear atoms, 5 degrees of freedom) at the last positions set. */
     virtual bool isBodyLinear(int index) const = 0;
-    /** How many bodies are linear at the last positions set. */
-    virtual int getNumLinearBodies() const = 0;
+    /** The bodies' degrees of freedom at the last positions set: 6 each, 5 if linear, 3 if its atoms coincide. */
+    virtual int getBodyDegreesOfFreedom() const = 0;
     /** Write the kernel's own state (e.g. its random stream) into a checkpoint. */
     virtual void createCheckpoint(OpenMM::ContextImpl& context, std::ostream& stream) const = 0;
     /** Read what createCheckpoint() wrote; throw an OpenMMException saying what is wrong if it does not fit. */

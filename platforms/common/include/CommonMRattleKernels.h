@@ -2,6 +2,7 @@
 #define MRATTLE_COMMON_KERNELS_H_
 
 #include "internal/RigidBodyKernels.h"
+#include "mrattle/RigidBodyMath.h"
 #include "openmm/common/ComputeArray.h"
 #include "openmm/common/ComputeContext.h"
 #include "openmm/common/ComputeKernel.h"
@@ -29,7 +30,7 @@ public:
                                                           int randomSeed, double tolerance) override;
     double computeKineticEnergy(OpenMM::ContextImpl& context) override;
     bool isBodyLinear(int index) const override;
-    int getNumLinearBodies() const override;
+    int getBodyDegreesOfFreedom() const override;
     void createCheckpoint(OpenMM::ContextImpl& context, std::ostream& stream) const override;
     void loadCheckpoint(OpenMM::ContextImpl& context, std::istream& stream) override;
 
@@ -47,7 +48,7 @@ private:
     RigidBodyTopology topology;
     std::vector<int> systemBodyAtoms, systemConstraintAtoms;  // System atom indices, body-major / cluster-major
     std::vector<double> constraintDistances;
-    std::vector<char> linear;
+    std::vector<RigidBodyMath::Shape> shapes;
     int numBodies = 0, numClusters = 0;
     bool hasAndersen = false, argumentsSet = false;
     int stepsSinceFailureCheck = 0;

@@ -76,7 +76,7 @@ void CommonIntegrateMRattleStepKernel::initialize(const System& system, const Ri
     ContextSelector selector(cc);
     topology = bodies;
     numBodies = topology.getNumBodies();
-    linear.assign(numBodies, 0);
+    shapes.assign(numBodies, RigidBodyMath::Shape::General);
     vector<int> starts = {0};
     for (int b = 0; b < numBodies; b++) {
         for (int atom : topology.getBodyParticles(b))
@@ -341,8 +341,8 @@ void CommonIntegrateMRattleStepKernel::updateShapes(ContextImpl& context) {
         RigidBodyMath::BodyView body{atoms.data(), (int) atoms.size(), topology.getMasses().data(),
                                      topology.getBodyMass(b), false};
         Eigen::Vector3d center = RigidBodyMath::centerOfMass(body, x);
-        linear[b] = RigidBodyMath::isLinearShape(RigidBodyMath::secondMoment(body, x, center));
-        flags[b] = linear[b];
+        shapes[b] = RigidBodyMath::classifyShape(RigidBodyMath::secondMoment(body, x, center), body.totalMass);
+        flags[b] = (shapes[b] != RigidBodyMath::Shape::General);  // a point takes the linear arithmetic
     }
     bodyLinear.upload(flags);
 }
@@ -385,7 +385,7 @@ vector<Vec3> CommonIntegrateMRattleStepKernel::getVelocitiesForTemperature(Conte
                 velocities[i] -= momentum / totalMass;
     for (int i = 0; i < numParticles; i++)
         kinetic += 0.5 * masses[i] * velocities[i].dot(velocities[i]);
-    const int dof = topology.getNumDegreesOfFreedom(getNumLinearBodies());
+    const int dof = topology.getNumDegreesOfFreedom(getBodyDegreesOfFreedom());
     if (kinetic > 0 && dof > 0)
         for (Vec3& v : velocities)
             v *= std::sqrt(0.5 * dof * BOLTZ * temperature / kinetic);
@@ -399,11 +399,14 @@ double CommonIntegrateMRattleStepKernel::computeKineticEnergy(ContextImpl& conte
 }
 
 bool CommonIntegrateMRattleStepKernel::isBodyLinear(int index) const {
-    return linear[index] != 0;
+    return shapes[index] == RigidBodyMath::Shape::Linear;
 }
 
-int CommonIntegrateMRattleStepKernel::getNumLinearBodies() const {
-    return std::accumulate(linear.begin(), linear.end(), 0);
+int CommonIntegrateMRattleStepKernel::getBodyDegreesOfFreedom() const {
+    int dof = 0;
+    for (RigidBodyMath::Shape shape : shapes)
+        dof += RigidBodyMath::degreesOfFreedom(shape);
+    return dof;
 }
 
 void CommonIntegrateMRattleStepKernel::createCheckpoint(ContextImpl& context, std::ostream& stream) const {

@@ -43,9 +43,10 @@ public:
     /** Classify each body's shape (linear or not) from the given positions. */
     void updateShapes(const std::vector<OpenMM::Vec3>& positions);
     bool isLinear(int body) const {
-        return linear[body] != 0;
+        return shapes[body] == RigidBodyMath::Shape::Linear;
     }
-    int getNumLinearBodies() const;
+    /** 6 per body, 5 if linear, 3 if its atoms coincide. */
+    int getBodyDegreesOfFreedom() const;
 
     /** RATTLE position step for free-particle constraints: moves newPositions onto the constraints. */
     void constrainFreePositions(std::vector<OpenMM::Vec3>& oldPositions, std::vector<OpenMM::Vec3>& newPositions,
@@ -84,7 +85,7 @@ public:
 private:
     RigidBodyTopology bodies;
     std::vector<double> inverseMass;
-    std::vector<char> linear;
+    std::vector<RigidBodyMath::Shape> shapes;
     std::unique_ptr<OpenMM::ReferenceConstraints> freeConstraints;
     bool andersen = false;
     std::mt19937_64 collisionRandom;

@@ -56,8 +56,8 @@ public:
     bool isBodyLinear(int index) const override {
         return dynamics->isLinear(index);
     }
-    int getNumLinearBodies() const override {
-        return dynamics->getNumLinearBodies();
+    int getBodyDegreesOfFreedom() const override {
+        return dynamics->getBodyDegreesOfFreedom();
     }
     void createCheckpoint(OpenMM::ContextImpl& context, std::ostream& stream) const override {
         dynamics->writeState(stream);

@@ -31,7 +31,7 @@ ReferenceRigidBodyDynamics::ReferenceRigidBodyDynamics(const System& system, con
         double mass = system.getParticleMass(i);
         inverseMass[i] = (mass == 0.0 ? 0.0 : 1.0 / mass);
     }
-    linear.assign(bodies.getNumBodies(), 0);
+    shapes.assign(bodies.getNumBodies(), RigidBodyMath::Shape::General);
     if (!bodies.getFreeConstraints().empty()) {
         // OpenMM's constraint code (CCMA, SETTLE for rigid water) on the free constraints only.
         System freeSystem;
@@ -73,8 +73,9 @@ void ReferenceRigidBodyDynamics::advanceClock(ContextImpl& context, double stepS
 
 RigidBodyMath::BodyView ReferenceRigidBodyDynamics::view(int body) const {
     const vector<int>& atoms = bodies.getBodyParticles(body);
+    // A point rotates no more than a line does: both take the linear body's arithmetic.
     return RigidBodyMath::BodyView{atoms.data(), (int) atoms.size(), bodies.getMasses().data(), bodies.getBodyMass(body),
-                                   linear[body] != 0};
+                                   shapes[body] != RigidBodyMath::Shape::General};
 }
 
 void ReferenceRigidBodyDynamics::updateShapes(const vector<Vec3>& positions) {
@@ -82,15 +83,15 @@ void ReferenceRigidBodyDynamics::updateShapes(const vector<Vec3>& positions) {
     for (int b = 0; b < bodies.getNumBodies(); b++) {
         RigidBodyMath::BodyView body = view(b);
         Eigen::Vector3d center = RigidBodyMath::centerOfMass(body, data);
-        linear[b] = RigidBodyMath::isLinearShape(RigidBodyMath::secondMoment(body, data, center));
+        shapes[b] = RigidBodyMath::classifyShape(RigidBodyMath::secondMoment(body, data, center), body.totalMass);
     }
 }
 
-int ReferenceRigidBodyDynamics::getNumLinearBodies() const {
-    int count = 0;
-    for (char isLinearBody : linear)
-        count += (isLinearBody != 0);
-    return count;
+int ReferenceRigidBodyDynamics::getBodyDegreesOfFreedom() const {
+    int dof = 0;
+    for (RigidBodyMath::Shape shape : shapes)
+        dof += RigidBodyMath::degreesOfFreedom(shape);
+    return dof;
 }
 
 void ReferenceRigidBodyDynamics::constrainFreePositions(vector<Vec3>& oldPositions, vector<Vec3>& newPositions,
@@ -169,7 +170,7 @@ vector<Vec3> ReferenceRigidBodyDynamics::velocitiesForTemperature(vector<Vec3>& 
                 velocities[i] -= centerVelocity;
     }
     double kinetic = kineticEnergy(velocities);
-    int dof = bodies.getNumDegreesOfFreedom(getNumLinearBodies());
+    int dof = bodies.getNumDegreesOfFreedom(getBodyDegreesOfFreedom());
     if (kinetic > 0 && dof > 0) {
         double scale = std::sqrt(0.5 * dof * BOLTZ * temperature / kinetic);
         for (Vec3& v : velocities)

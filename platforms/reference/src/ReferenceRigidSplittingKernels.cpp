@@ -1,6 +1,8 @@
 #include "ReferenceRigidSplittingKernels.h"
 #include "mrattle/RigidBodyRotor.h"
+#include "openmm/OpenMMException.h"
 #include "openmm/internal/ContextImpl.h"
+#include <cmath>
 
 using namespace MRattlePlugin;
 using namespace OpenMM;
@@ -22,8 +24,16 @@ void ReferenceIntegrateRigidSplittingStepKernel::integratePositions(ContextImpl&
         newPositions[i] = (inverseMass[i] != 0 ? x[i] + (v[i] + f[i] * (0.5 * h * inverseMass[i])) * h : x[i]);
     dynamics->constrainFreePositions(x, newPositions, integrator.getConstraintTolerance());
     for (int b = 0; b < bodies.getNumBodies(); b++)
-        RigidBodyRotor::positionStep(dynamics->view(b), coordinates(x), coordinates(v), coordinates(f), h,
-                                     coordinates(newPositions), coordinates(newVelocities));
+        if (!RigidBodyRotor::positionStep(dynamics->view(b), coordinates(x), coordinates(v), coordinates(f), h,
+                                          coordinates(newPositions), coordinates(newVelocities)))
+            throw OpenMMException("RigidSplittingIntegrator: rigid body " + std::to_string(b) +
+                                  " would turn by more than a quarter turn in one step, or its motion is not finite; "
+                                  "the step size is too large for the forces, or they are not finite");
+    // Free particles: refuse what is not finite, as for bodies (the Context is not yet changed).
+    for (int i : bodies.getFreeParticles())
+        if (!std::isfinite(newPositions[i][0] + newPositions[i][1] + newPositions[i][2]))
+            throw OpenMMException("RigidSplittingIntegrator: particle " + std::to_string(i) +
+                                  " would move to a position that is not finite; the forces are not finite");
     const double inverseStep = 1.0 / h;
     for (int i = 0; i < n; i++) {
         if (inverseMass[i] != 0) {

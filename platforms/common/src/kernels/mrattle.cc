@@ -208,7 +208,8 @@ KERNEL void resetBodies(int numBodies, GLOBAL const int* RESTRICT bodyStart, GLO
         mixed3 origin, center, V;
         bodyCenterAndVelocity(start, end, bodyAtoms, posq, posqCorrection, newVelocity, &origin, &center, &V);
         Matrix3 delta = zeroMatrix();
-        bool converged = true;
+        bool converged = (dot(V, V) <= 1e30f && dot(center, center) <= 1e30f);  // false for inf and NaN
+        if (converged) {
         if (bodyLinear[body] == 0) {
             Matrix3 J = zeroMatrix();
             mixed3 target = make_mixed3(0, 0, 0);
@@ -272,6 +273,7 @@ KERNEL void resetBodies(int numBodies, GLOBAL const int* RESTRICT bodyStart, GLO
                     }
                 }
             }
+        }
         }
         if (!converged) {
             recordFailure(failure, step);
