@@ -355,3 +355,4 @@ TEST(OpenCL, FailedStepIsReportedWithTheStateBeforeIt) {
     }
 }
 
+

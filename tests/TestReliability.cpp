@@ -212,3 +212,31 @@ TEST(Reliability, ACheckpointWithADamagedIntegratorNameIsRefusedWithAReadableMes
 }
 
 INSTANTIATE_TEST_SUITE_P(AllConfigs, Reliability, ::testing::ValuesIn(allConfigs()), configName);
+
+TEST(Reliability, DamageAnywhereInTheIntegratorsCheckpointDataIsRefused) {
+    // Every byte of the integrator's part (header, kernel state, checksum) flipped in turn:
+    // each damaged checkpoint is refused, none is loaded as if it were whole.
+    Cluster c = buildCluster(benzene(), 1, 0.7, 1);
+    c.system->addForce(new AndersenThermostat(300, 5.0));  // the kernel then has a random state to save
+    MRattleIntegrator integrator(0.002);
+    Context context(*c.system, integrator, platform("Reference"));
+    context.setPositions(c.positions);
+    context.setVelocitiesToTemperature(300, 1);
+    integrator.step(3);
+    std::stringstream stream;
+    context.createCheckpoint(stream);
+    const string checkpoint = stream.str();
+    const size_t start = checkpoint.rfind("MRattleC");
+    ASSERT_GT(checkpoint.size() - start, 100u);  // header, a few kB of random state, checksum
+    int refused = 0, tried = 0;
+    for (size_t at = start; at < checkpoint.size(); at += 7, tried++) {
+        string damaged = checkpoint;
+        damaged[at] ^= 0x04;
+        std::istringstream in(damaged);
+        refused += !messageOf([&] { context.loadCheckpoint(in); }).empty();
+    }
+    EXPECT_EQ(tried, refused);
+    std::istringstream whole(checkpoint);
+    context.loadCheckpoint(whole);
+    integrator.step(1);
+}

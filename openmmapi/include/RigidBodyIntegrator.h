@@ -105,6 +105,10 @@ private:
     /** A refused checkpoint left mixed data: stepping waits until positions and velocities are set again. */
     bool refusedCheckpoint = false;
     bool positionsSetSinceRefusal = false, velocitiesSetSinceRefusal = false;
+    /** The last positions or velocities set were not finite: stepping waits until finite ones are set. */
+    bool positionsNotFinite = false, velocitiesNotFinite = false;
+    /** Positions were set (or loaded): rigid-body velocities are defined only relative to them. */
+    bool positionsSet = false;
 };
 
 } // namespace MRattlePlugin

@@ -14,10 +14,37 @@ namespace {
 // The integrator's part of a checkpoint (OpenMM writes it after the Context's own data):
 // magic, format version, the step kernel's name, the number of bodies in effect and their
 // signature, then the kernel's own state. Numbers are native-endian, like the rest of an
-// OpenMM checkpoint. Version 2: the kernel's state follows the header.
+// OpenMM checkpoint. Version 2: the kernel's state follows the header. Version 3: the
+// kernel's state is framed by its length, and an FNV-1a checksum of everything closes it.
 const char CheckpointMagic[8] = {'M', 'R', 'a', 't', 't', 'l', 'e', 'C'};
-const int32_t CheckpointVersion = 2;
+const int32_t CheckpointVersion = 3;
 const int32_t MaxKernelNameLength = 1024;
+const int64_t MaxKernelStateLength = 1 << 24;
+
+uint64_t checksum(const std::string& bytes) {
+    uint64_t hash = 14695981039346656037ULL;
+    for (unsigned char c : bytes) {
+        hash ^= c;
+        hash *= 1099511628211ULL;
+    }
+    return hash;
+}
+
+/** Reads from a stream and keeps a copy of every byte read, for the checksum. */
+struct RecordingReader {
+    std::istream& stream;
+    std::string bytes;
+    void read(char* data, std::streamsize count) {
+        stream.read(data, count);
+        bytes.append(data, stream.gcount());
+    }
+    std::streamsize gcount() const {
+        return stream.gcount();
+    }
+    explicit operator bool() const {
+        return (bool) stream;
+    }
+};
 
 template <class T>
 void writeValue(std::ostream& stream, T value) {
@@ -25,7 +52,7 @@ void writeValue(std::ostream& stream, T value) {
 }
 
 template <class T>
-T readValue(std::istream& stream, const char* what) {
+T readValue(RecordingReader& stream, const char* what) {
     T value;
     stream.read(reinterpret_cast<char*>(&value), sizeof(T));
     if (!stream || stream.gcount() != (std::streamsize) sizeof(T))
@@ -49,18 +76,25 @@ std::string printable(const std::string& name) {
 
 } // namespace
 
-void RigidBodyCheckpointHeader::write(std::ostream& stream, const std::string& kernelName,
-                                      const RigidBodyTopology& topology) {
+void RigidBodyCheckpointHeader::write(std::ostream& out, const std::string& kernelName,
+                                      const RigidBodyTopology& topology, const std::string& kernelState) {
+    std::ostringstream stream;
     stream.write(CheckpointMagic, sizeof(CheckpointMagic));
     writeValue<int32_t>(stream, CheckpointVersion);
     writeValue<int32_t>(stream, kernelName.size());
     stream.write(kernelName.data(), kernelName.size());
     writeValue<int32_t>(stream, topology.getNumBodies());
     writeValue<uint64_t>(stream, topology.getSignature());
+    writeValue<int64_t>(stream, kernelState.size());
+    stream.write(kernelState.data(), kernelState.size());
+    const std::string bytes = stream.str();
+    out.write(bytes.data(), bytes.size());
+    writeValue<uint64_t>(out, checksum(bytes));
 }
 
-void RigidBodyCheckpointHeader::check(std::istream& stream, const std::string& kernelName,
-                                      const RigidBodyTopology& topology) {
+std::string RigidBodyCheckpointHeader::read(std::istream& input, const std::string& kernelName,
+                                            const RigidBodyTopology& topology) {
+    RecordingReader stream{input, std::string()};
     char magic[sizeof(CheckpointMagic)];
     stream.read(magic, sizeof(magic));
     if (!stream || stream.gcount() != (std::streamsize) sizeof(magic))
@@ -94,4 +128,18 @@ void RigidBodyCheckpointHeader::check(std::istream& stream, const std::string& k
                               std::to_string(topology.getNumBodies()) + " (signature " + hex(topology.getSignature()) +
                               "): the bodies differ, so the System or the bodies declared with addRigidBody() are not "
                               "those the checkpoint was written with");
+    int64_t stateLength = readValue<int64_t>(stream, "kernel's state");
+    if (stateLength < 0 || stateLength > MaxKernelStateLength)
+        throw OpenMMException("the checkpoint's rigid-body integrator data is malformed (kernel state of length " +
+                              std::to_string(stateLength) + ")");
+    std::string state(stateLength, ' ');
+    stream.read(&state[0], stateLength);
+    if (!stream || stream.gcount() != stateLength)
+        throw OpenMMException("the checkpoint is truncated (it ends in the kernel's state)");
+    const uint64_t expectedChecksum = checksum(stream.bytes);
+    const uint64_t found = readValue<uint64_t>(stream, "checksum");
+    if (found != expectedChecksum)
+        throw OpenMMException("the checkpoint's rigid-body integrator data is damaged (its checksum is " + hex(found) +
+                              ", and its contents give " + hex(expectedChecksum) + ")");
+    return state;
 }

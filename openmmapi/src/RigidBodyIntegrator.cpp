@@ -6,6 +6,7 @@
 #include "openmm/OpenMMException.h"
 #include "openmm/internal/ContextImpl.h"
 #include <cmath>
+#include <sstream>
 
 using namespace MRattlePlugin;
 using namespace OpenMM;
@@ -95,6 +96,8 @@ void RigidBodyIntegrator::initialize(ContextImpl& contextRef) {
     velocitiesNeedProjection = false;
     lastStepCount = -1;
     refusedCheckpoint = false;
+    positionsNotFinite = velocitiesNotFinite = false;
+    positionsSet = false;
 }
 
 void RigidBodyIntegrator::cleanup() {
@@ -119,7 +122,15 @@ void RigidBodyIntegrator::stateChanged(State::DataType changed) {
         return;
     RigidBodyKernel& stepKernel = kernel.getAs<RigidBodyKernel>();
     if (changed == State::Positions) {
-        stepKernel.updateShapes(*context);
+        try {
+            stepKernel.updateShapes(*context);
+        } catch (const OpenMMException& e) {
+            positionsNotFinite = true;
+            throw OpenMMException(std::string("setPositions: ") + e.what() + "; the integrator will not step until "
+                                  "finite positions are set");
+        }
+        positionsNotFinite = false;
+        positionsSet = true;
         positionsSetSinceRefusal = true;
     }
     if (changed == State::Velocities)
@@ -129,8 +140,18 @@ void RigidBodyIntegrator::stateChanged(State::DataType changed) {
     // Velocities the user sets are made rigid at once, so what the Context reports is what
     // the integrator uses; rigid ones (a checkpoint's, a saved State's) are kept bit for bit.
     if (changed == State::Positions || changed == State::Velocities) {
-        if (isCurrentIntegrator())
-            stepKernel.projectVelocities(*context, getConstraintTolerance());
+        // After a refused checkpoint the velocities are that checkpoint's (on some platforms
+        // garbage): they are projected once new ones are set.
+        if (isCurrentIntegrator() && positionsSet && !refusedCheckpoint) {
+            try {
+                stepKernel.projectVelocities(*context, getConstraintTolerance());
+            } catch (const OpenMMException& e) {
+                velocitiesNotFinite = true;
+                throw OpenMMException(std::string("setVelocities: ") + e.what() + "; the integrator will not step "
+                                      "until finite velocities are set");
+            }
+            velocitiesNotFinite = false;
+        }
         else
             velocitiesNeedProjection = true;
     }
@@ -138,15 +159,16 @@ void RigidBodyIntegrator::stateChanged(State::DataType changed) {
 
 void RigidBodyIntegrator::createCheckpoint(std::ostream& stream) const {
     requireContext();
-    RigidBodyCheckpointHeader::write(stream, getStepKernelName(), topology);
-    kernel.getAs<const RigidBodyKernel>().createCheckpoint(*context, stream);
+    std::ostringstream kernelState;
+    kernel.getAs<const RigidBodyKernel>().createCheckpoint(*context, kernelState);
+    RigidBodyCheckpointHeader::write(stream, getStepKernelName(), topology, kernelState.str());
 }
 
 void RigidBodyIntegrator::loadCheckpoint(std::istream& stream) {
     requireContext();
     try {
-        RigidBodyCheckpointHeader::check(stream, getStepKernelName(), topology);
-        kernel.getAs<RigidBodyKernel>().loadCheckpoint(*context, stream);
+        std::istringstream kernelState(RigidBodyCheckpointHeader::read(stream, getStepKernelName(), topology));
+        kernel.getAs<RigidBodyKernel>().loadCheckpoint(*context, kernelState);
     } catch (const OpenMMException& e) {
         // OpenMM has already overwritten positions, velocities, time, box and parameters.
         refusedCheckpoint = true;
@@ -176,6 +198,8 @@ vector<Vec3> RigidBodyIntegrator::getVelocitiesForTemperature(const System& syst
     if (!(temperature >= 0) || !std::isfinite(temperature))
         throw OpenMMException("setVelocitiesToTemperature: the temperature must be a finite number >= 0, got " +
                               std::to_string(temperature));
+    if (!positionsSet)
+        throw OpenMMException("setVelocitiesToTemperature: set the positions first: rigid-body velocities depend on them");
     return kernel.getAs<RigidBodyKernel>().getVelocitiesForTemperature(*context, temperature, randomSeed,
                                                                        getConstraintTolerance());
 }
@@ -189,6 +213,11 @@ void RigidBodyIntegrator::step(int steps) {
         throw OpenMMException("step: the last loadCheckpoint() was refused and left part of that checkpoint's data in "
                               "the Context; set positions and velocities again, or load a checkpoint that fits, before "
                               "stepping");
+    if (!positionsSet)
+        throw OpenMMException("step: the Context's positions have not been set");
+    if (positionsNotFinite || velocitiesNotFinite)
+        throw OpenMMException(std::string("step: the Context's ") + (positionsNotFinite ? "positions" : "velocities") +
+                              " are not finite; set finite ones before stepping");
     RigidBodyKernel& stepKernel = kernel.getAs<RigidBodyKernel>();
     for (int i = 0; i < steps; i++) {
         // Another integrator (of a CompoundIntegrator) stepped since this one did, or

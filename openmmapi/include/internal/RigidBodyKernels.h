@@ -47,13 +47,17 @@ public:
      *                        for the integration force groups; out: true after a step
      */
     virtual void execute(OpenMM::ContextImpl& context, const RigidBodyIntegrator& integrator, bool& forcesAreValid) = 0;
-    /** The Context's positions were set: classify the bodies' shapes (linear or not) from them. */
+    /**
+     * The Context's positions were set: classify the bodies' shapes (linear or not) from
+     * them. Throws an OpenMMException naming a particle whose position is not finite.
+     */
     virtual void updateShapes(OpenMM::ContextImpl& context) = 0;
     /**
      * Make the Context's velocities rigid: each body whose velocities are not rigid-body
      * motion at the current positions is replaced by its mass-weighted projection;
      * velocities along free-particle constraints are removed to the given tolerance.
      * Velocities that are already rigid (to round-off) are left bit for bit as they are.
+     * Throws an OpenMMException naming a particle whose velocity is not finite.
      */
     virtual void projectVelocities(OpenMM::ContextImpl& context, double tolerance) = 0;
     /**

@@ -54,6 +54,13 @@ vector<vector<int> > constraintClusters(const System& system, const vector<int>&
     return clusters;
 }
 
+/** Throw naming the first particle whose value is not finite. */
+void requireFinite(const vector<Vec3>& values, const char* what) {
+    for (size_t i = 0; i < values.size(); i++)
+        if (!std::isfinite(values[i][0] + values[i][1] + values[i][2]))
+            throw OpenMMException(std::string("the ") + what + " of particle " + std::to_string(i) + " is not finite");
+}
+
 } // namespace
 
 class CommonIntegrateMRattleStepKernel::ReorderListener : public ComputeContext::ReorderListener {
@@ -138,9 +145,15 @@ void CommonIntegrateMRattleStepKernel::initialize(const System& system, const Ri
 void CommonIntegrateMRattleStepKernel::mapAtoms() {
     // cc.getAtomIndex()[i] is the System index of the atom the device holds at i.
     const vector<int>& order = cc.getAtomIndex();
-    vector<int> deviceIndex(order.size());
-    for (size_t i = 0; i < order.size(); i++)
+    // A damaged checkpoint can hand OpenMM an order that is no permutation (it loads what it
+    // reads): then map nothing, rather than write out of bounds; the Context must be set up
+    // again before it steps (the integrator refuses until then).
+    vector<int> deviceIndex(order.size(), -1);
+    for (size_t i = 0; i < order.size(); i++) {
+        if (order[i] < 0 || order[i] >= (int) order.size() || deviceIndex[order[i]] != -1)
+            return;
         deviceIndex[order[i]] = i;
+    }
     if (!systemBodyAtoms.empty()) {
         vector<int> atoms(systemBodyAtoms.size());
         for (size_t k = 0; k < atoms.size(); k++)
@@ -173,6 +186,7 @@ void CommonIntegrateMRattleStepKernel::setKernelArguments() {
     kickAndDrift->addArg(integration.getPosDelta());
     kickAndDrift->addArg(newVelocity);
     kickAndDrift->addArg(failure);
+    kickAndDrift->addArg(0);  // 8: the step
 
     resetBodies->addArg(numBodies);
     resetBodies->addArg(bodyStart);
@@ -283,6 +297,7 @@ void CommonIntegrateMRattleStepKernel::execute(ContextImpl& context, const Rigid
         project(tolerance, true, true, BOLTZ * context.getParameter(AndersenThermostat::Temperature()));
     if (!forcesAreValid)
         context.calcForcesAndEnergy(true, false, integrator.getIntegrationForceGroups());
+    kickAndDrift->setArg(8, step);
     kickAndDrift->execute(numAtoms);
     if (numBodies > 0) {
         resetBodies->setArg(10, step);
@@ -323,8 +338,9 @@ void CommonIntegrateMRattleStepKernel::checkFailure() {
     cc.setStepCount(failedStep);
     failure.upload(vector<int>(1, 0));
     throw OpenMMException("MRattleIntegrator: at step " + std::to_string(failedStep) +
-                          " the position reset of a rigid body found no rotation, or the free-particle constraints did "
-                          "not converge; the step size is too large for the forces, or they are not finite. The "
+                          " the position reset of a rigid body found no rotation, the free-particle constraints did not "
+                          "converge, or a velocity was not finite; the step size is too large for the forces, or they "
+                          "are not finite. The "
                           "Context holds the state from before that step.");
 }
 
@@ -334,6 +350,7 @@ void CommonIntegrateMRattleStepKernel::updateShapes(ContextImpl& context) {
     // Positions were just uploaded from the host: classify on the host with the core.
     vector<Vec3> positions;
     context.getPositions(positions);
+    requireFinite(positions, "position");
     const double* x = reinterpret_cast<const double*>(positions.data());
     vector<int> flags(std::max(1, numBodies), 0);
     for (int b = 0; b < numBodies; b++) {
@@ -350,7 +367,15 @@ void CommonIntegrateMRattleStepKernel::updateShapes(ContextImpl& context) {
 void CommonIntegrateMRattleStepKernel::projectVelocities(ContextImpl& context, double tolerance) {
     ContextSelector selector(cc);
     checkFailure();
+    // Velocities are set from the host: checking them there costs one download per set.
+    vector<Vec3> velocities;
+    context.getVelocities(velocities);
+    requireFinite(velocities, "velocity");
     project(tolerance, true, false, 0.0);
+    // The integrator then refuses to step until finite velocities are set.
+    vector<Vec3> projected;
+    context.getVelocities(projected);
+    requireFinite(projected, "velocity projected at the current positions (a degenerate constraint?)");
 }
 
 vector<Vec3> CommonIntegrateMRattleStepKernel::getVelocitiesForTemperature(ContextImpl& context, double temperature,

@@ -3,7 +3,9 @@
 
 #include "ReferenceRigidBodyDynamics.h"
 #include "RigidBodyIntegrator.h"
+#include "openmm/OpenMMException.h"
 #include "openmm/internal/ContextImpl.h"
+#include <cmath>
 #include <memory>
 #include <string>
 #include <vector>
@@ -39,11 +41,20 @@ public:
         forcesAreValid = true;
     }
     void updateShapes(OpenMM::ContextImpl& context) override {
+        requireFinite(ReferenceRigidBodyDynamics::positions(context), "position");
         dynamics->updateShapes(ReferenceRigidBodyDynamics::positions(context));
     }
     void projectVelocities(OpenMM::ContextImpl& context, double tolerance) override {
-        dynamics->projectNonRigidVelocities(ReferenceRigidBodyDynamics::positions(context),
-                                            ReferenceRigidBodyDynamics::velocities(context), tolerance);
+        std::vector<OpenMM::Vec3>& velocities = ReferenceRigidBodyDynamics::velocities(context);
+        requireFinite(velocities, "velocity");
+        const std::vector<OpenMM::Vec3> given = velocities;  // only when velocities are set, not in the step
+        dynamics->projectNonRigidVelocities(ReferenceRigidBodyDynamics::positions(context), velocities, tolerance);
+        try {
+            requireFinite(velocities, "velocity projected at the current positions (a degenerate constraint?)");
+        } catch (...) {
+            velocities = given;
+            throw;
+        }
     }
     std::vector<OpenMM::Vec3> getVelocitiesForTemperature(OpenMM::ContextImpl& context, double temperature,
                                                           int randomSeed, double tolerance) override {
@@ -67,6 +78,13 @@ public:
     }
 
 protected:
+    /** Throw naming the first particle whose value is not finite. */
+    static void requireFinite(const std::vector<OpenMM::Vec3>& values, const char* what) {
+        for (size_t i = 0; i < values.size(); i++)
+            if (!std::isfinite(values[i][0] + values[i][1] + values[i][2]))
+                throw OpenMM::OpenMMException(std::string("the ") + what + " of particle " + std::to_string(i) +
+                                              " is not finite");
+    }
     /**
      * The first half of the step: half kick, drift, the integrator's position update,
      * free-particle constraints, virtual sites. Throws an OpenMMException, with the Context

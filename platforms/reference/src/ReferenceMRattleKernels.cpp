@@ -1,5 +1,6 @@
 #include "ReferenceMRattleKernels.h"
 #include "openmm/OpenMMException.h"
+#include <cmath>
 #include "openmm/internal/ContextImpl.h"
 
 using namespace MRattlePlugin;
@@ -28,8 +29,13 @@ void ReferenceIntegrateMRattleStepKernel::integratePositions(ContextImpl& contex
     // Free particles: RATTLE for their constraints, velocities from the displacement.
     dynamics->constrainFreePositions(x, newPositions, integrator.getConstraintTolerance());
     const double inverseStep = 1.0 / h;
-    for (int i : dynamics->topology().getFreeParticles())
+    for (int i : dynamics->topology().getFreeParticles()) {
         newVelocities[i] = (newPositions[i] - x[i]) * inverseStep;
+        if (!std::isfinite(newPositions[i][0] + newPositions[i][1] + newPositions[i][2] + newVelocities[i][0] +
+                           newVelocities[i][1] + newVelocities[i][2]))
+            throw OpenMMException("MRattleIntegrator: particle " + std::to_string(i) +
+                                  " would move to a position that is not finite; its force or velocity is not finite");
+    }
     // Bodies: M-RATTLE's reset, new positions and velocities formed from displacements.
     for (int b = 0; b < dynamics->topology().getNumBodies(); b++) {
         RigidBodyMath::RotationSolve solve = RigidBodyMath::driftAndResetBody(

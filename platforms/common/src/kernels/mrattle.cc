@@ -171,7 +171,7 @@ DEVICE void bodyCenterAndVelocity(int start, int end, GLOBAL const int* RESTRICT
  */
 KERNEL void kickAndDrift(int numAtoms, int paddedNumAtoms, GLOBAL const mixed2* RESTRICT dt,
         GLOBAL const mixed4* RESTRICT velm, GLOBAL const mm_long* RESTRICT force, GLOBAL mixed4* RESTRICT posDelta,
-        GLOBAL mixed4* RESTRICT newVelocity, GLOBAL const int* RESTRICT failure) {
+        GLOBAL mixed4* RESTRICT newVelocity, GLOBAL int* RESTRICT failure, int step) {
     if (failure[0] != 0)
         return;
     const mixed h = dt[0].y;
@@ -183,6 +183,8 @@ KERNEL void kickAndDrift(int numAtoms, int paddedNumAtoms, GLOBAL const mixed2* 
             velocity.y += scale*force[index+paddedNumAtoms]*velocity.w;
             velocity.z += scale*force[index+paddedNumAtoms*2]*velocity.w;
             posDelta[index] = make_mixed4(h*velocity.x, h*velocity.y, h*velocity.z, 0);
+            if (!(velocity.x*velocity.x + velocity.y*velocity.y + velocity.z*velocity.z <= 1e30f))
+                recordFailure(failure, step);  // not finite (NaN fails every comparison)
         }
         else
             posDelta[index] = make_mixed4(0, 0, 0, 0);
