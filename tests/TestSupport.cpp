@@ -1,5 +1,6 @@
 #include "TestSupport.h"
 #include "MRattleBuildInfo.h"
+#include "MRattleLangevinIntegrator.h"
 #include "RigidSplittingIntegrator.h"
 #include <gtest/gtest.h>
 #include "openmm/OpenMMException.h"
@@ -55,8 +56,11 @@ bool havePlatform(const std::string& name) {
 std::vector<Config> configsOf(const std::string& integrator) {
     std::vector<Config> configs = {{"Reference", integrator}, {"CPU", integrator}};
 #ifdef MRATTLE_HAVE_OPENCL
-    // M-RATTLE runs on OpenCL too (the splitting baseline does not).
-    if (integrator == "MRattle" && havePlatform("OpenCL"))
+    // On OpenCL where the integrator's kernel is registered there (not the splitting baseline's).
+    static const std::map<std::string, std::string> kernels = {{"MRattle", "IntegrateMRattleStep"},
+                                                               {"MRattleLangevin", "IntegrateMRattleLangevinStep"}};
+    if (kernels.count(integrator) && havePlatform("OpenCL") &&
+        Platform::getPlatformByName("OpenCL").supportsKernels({kernels.at(integrator)}))
         configs.push_back({"OpenCL", integrator});
 #endif
     return configs;
@@ -82,6 +86,9 @@ std::unique_ptr<MRattlePlugin::RigidBodyIntegrator> makeIntegrator(const std::st
         return std::unique_ptr<MRattlePlugin::RigidBodyIntegrator>(new MRattlePlugin::MRattleIntegrator(stepSize));
     if (kind == "RigidSplitting")
         return std::unique_ptr<MRattlePlugin::RigidBodyIntegrator>(new MRattlePlugin::RigidSplittingIntegrator(stepSize));
+    if (kind == "MRattleLangevin")  // 300 K, 1/ps
+        return std::unique_ptr<MRattlePlugin::RigidBodyIntegrator>(
+            new MRattlePlugin::MRattleLangevinIntegrator(300.0, 1.0, stepSize));
     throw OpenMMException("makeIntegrator: no integrator kind '" + kind + "'");
 }
 

@@ -10,3 +10,6 @@ MRattlePlugin::IntegrateMRattleStepKernel::~IntegrateMRattleStepKernel() {
 
 MRattlePlugin::IntegrateRigidSplittingStepKernel::~IntegrateRigidSplittingStepKernel() {
 }
+
+MRattlePlugin::IntegrateMRattleLangevinStepKernel::~IntegrateMRattleLangevinStepKernel() {
+}

@@ -48,7 +48,7 @@ def _hasPlatform(name):
 
 
 # The SWIG module first: it loads libMRattlePlugin.so, which the kernel plugin needs.
-from .integrators import RigidBodyIntegrator, MRattleIntegrator, RigidSplittingIntegrator
+from .integrators import RigidBodyIntegrator, MRattleIntegrator, MRattleLangevinIntegrator, RigidSplittingIntegrator
 
 PLUGIN_PATH = _loadKernelPlugin(_plugin_location.PLUGIN_PATH, required=True)
 #: The OpenCL kernel plugin, or None where it was not built or OpenMM has no OpenCL platform.
@@ -63,6 +63,6 @@ from .serialization import asPluginIntegrator, installXmlSerializerHooks as _ins
 _installXmlSerializerHooks()
 
 
-__all__ = ['RigidBodyIntegrator', 'MRattleIntegrator', 'RigidSplittingIntegrator', 'StateDataReporter', 'degreesOfFreedom',
+__all__ = ['RigidBodyIntegrator', 'MRattleIntegrator', 'MRattleLangevinIntegrator', 'RigidSplittingIntegrator', 'StateDataReporter', 'degreesOfFreedom',
            'kineticTemperature', 'removeIntraBodyInteractions', 'asPluginIntegrator', 'models', 'PLUGIN_PATH',
            'OPENCL_PLUGIN_PATH']

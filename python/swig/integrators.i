@@ -17,6 +17,7 @@ from openmm import unit
 
 %{
 #include "MRattleIntegrator.h"
+#include "MRattleLangevinIntegrator.h"
 #include "RigidSplittingIntegrator.h"
 #include <climits>
 #include <exception>
@@ -124,6 +125,33 @@ static PyObject* intListToPython(const std::vector<int>& values) {
 MRATTLE_INTEGRATOR(MRattleIntegrator, "MRattleIntegrator.h")
 MRATTLE_INTEGRATOR(RigidSplittingIntegrator, "RigidSplittingIntegrator.h")
 
+/* The Langevin integrator: temperature, friction and step size with units, as OpenMM's LangevinMiddleIntegrator. */
+%typemap(doctype) double temperature "float or Quantity (temperature)"
+%typemap(doctype) double frictionCoeff "float or Quantity (1/time)"
+%feature("pythonprepend") MRattlePlugin::MRattleLangevinIntegrator::MRattleLangevinIntegrator %{
+    if unit.is_quantity(temperature):
+        temperature = temperature.value_in_unit(unit.kelvin)
+    if unit.is_quantity(frictionCoeff):
+        frictionCoeff = frictionCoeff.value_in_unit(unit.picosecond**-1)
+    if unit.is_quantity(stepSize):
+        stepSize = stepSize.value_in_unit(unit.picosecond)
+%}
+%feature("pythonprepend") MRattlePlugin::MRattleLangevinIntegrator::setTemperature %{
+    if unit.is_quantity(temperature):
+        temperature = temperature.value_in_unit(unit.kelvin)
+%}
+%feature("pythonprepend") MRattlePlugin::MRattleLangevinIntegrator::setFriction %{
+    if unit.is_quantity(coeff):
+        coeff = coeff.value_in_unit(unit.picosecond**-1)
+%}
+%feature("pythonappend") MRattlePlugin::MRattleLangevinIntegrator::getTemperature %{
+    val = val*unit.kelvin
+%}
+%feature("pythonappend") MRattlePlugin::MRattleLangevinIntegrator::getFriction %{
+    val = val/unit.picosecond
+%}
+%include "MRattleLangevinIntegrator.h"
+
 /*
  * OpenMM's XmlSerializer returns deserialized integrators as plain openmm.Integrator
  * proxies: this gives a new, non-owning proxy of the plugin's class for the same object
@@ -135,6 +163,8 @@ PyObject* _pluginIntegratorProxy(OpenMM::Integrator* integrator) {
         return SWIG_NewPointerObj(SWIG_as_voidptr(cast), SWIGTYPE_p_MRattlePlugin__MRattleIntegrator, 0);
     if (MRattlePlugin::RigidSplittingIntegrator* cast = dynamic_cast<MRattlePlugin::RigidSplittingIntegrator*>(integrator))
         return SWIG_NewPointerObj(SWIG_as_voidptr(cast), SWIGTYPE_p_MRattlePlugin__RigidSplittingIntegrator, 0);
+    if (MRattlePlugin::MRattleLangevinIntegrator* cast = dynamic_cast<MRattlePlugin::MRattleLangevinIntegrator*>(integrator))
+        return SWIG_NewPointerObj(SWIG_as_voidptr(cast), SWIGTYPE_p_MRattlePlugin__MRattleLangevinIntegrator, 0);
     Py_RETURN_NONE;
 }
 %}

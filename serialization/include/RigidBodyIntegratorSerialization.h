@@ -35,6 +35,10 @@ public:
     static int checkVersion(const OpenMM::SerializationNode& node, const std::string& typeName, int latestVersion);
     /** The step size stored in node (to construct the integrator with). */
     static double getStepSize(const OpenMM::SerializationNode& node, const std::string& typeName);
+    /** A property that must be a finite decimal number (strictly parsed). */
+    static double getDouble(const OpenMM::SerializationNode& node, const std::string& name, const std::string& typeName);
+    /** A property that must be a 32-bit integer (strictly parsed). */
+    static int getInteger(const OpenMM::SerializationNode& node, const std::string& name, const std::string& typeName);
     /** Apply the shared settings stored in node to a newly constructed integrator. */
     static void deserialize(const OpenMM::SerializationNode& node, const std::string& typeName,
                             RigidBodyIntegrator& integrator);

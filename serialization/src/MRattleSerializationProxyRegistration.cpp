@@ -1,5 +1,7 @@
 #include "MRattleIntegrator.h"
 #include "MRattleIntegratorProxy.h"
+#include "MRattleLangevinIntegrator.h"
+#include "MRattleLangevinIntegratorProxy.h"
 #include "RigidSplittingIntegrator.h"
 #include "RigidSplittingIntegratorProxy.h"
 #include "openmm/serialization/SerializationProxy.h"
@@ -25,4 +27,5 @@ using namespace OpenMM;
 extern "C" OPENMM_EXPORT_MRATTLE void registerMRattleSerializationProxies() {
     SerializationProxy::registerProxy(typeid(MRattleIntegrator), new MRattleIntegratorProxy());
     SerializationProxy::registerProxy(typeid(RigidSplittingIntegrator), new RigidSplittingIntegratorProxy());
+    SerializationProxy::registerProxy(typeid(MRattleLangevinIntegrator), new MRattleLangevinIntegratorProxy());
 }

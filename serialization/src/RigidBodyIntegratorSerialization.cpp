@@ -84,6 +84,16 @@ double RigidBodyIntegratorSerialization::getStepSize(const SerializationNode& no
     return stepSize;
 }
 
+double RigidBodyIntegratorSerialization::getDouble(const SerializationNode& node, const string& name,
+                                                  const string& typeName) {
+    return parseDouble(node, name, typeName);
+}
+
+int RigidBodyIntegratorSerialization::getInteger(const SerializationNode& node, const string& name,
+                                                 const string& typeName) {
+    return parseInteger(node, name, typeName);
+}
+
 void RigidBodyIntegratorSerialization::deserialize(const SerializationNode& node, const string& typeName,
                                                    RigidBodyIntegrator& integrator) {
     integrator.setStepSize(getStepSize(node, typeName));

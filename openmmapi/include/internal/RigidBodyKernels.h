@@ -90,6 +90,18 @@ public:
     ~IntegrateMRattleStepKernel() override;
 };
 
+/** Langevin dynamics with M-RATTLE (MRattleLangevinIntegrator): the integrator passed to execute() is one. */
+class OPENMM_EXPORT_MRATTLE IntegrateMRattleLangevinStepKernel : public RigidBodyKernel {
+public:
+    static std::string Name() {
+        return "IntegrateMRattleLangevinStep";
+    }
+    IntegrateMRattleLangevinStepKernel(const std::string& name, const OpenMM::Platform& platform)
+        : RigidBodyKernel(name, platform) {
+    }
+    ~IntegrateMRattleLangevinStepKernel() override;
+};
+
 /** The symplectic splitting baseline: the position update is a free-rotor splitting per body. */
 class OPENMM_EXPORT_MRATTLE IntegrateRigidSplittingStepKernel : public RigidBodyKernel {
 public:

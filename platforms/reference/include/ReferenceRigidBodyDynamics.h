@@ -48,6 +48,15 @@ public:
     /** 6 per body, 5 if linear, 3 if its atoms coincide. */
     int getBodyDegreesOfFreedom() const;
 
+    /**
+     * Drift over time h from positions x with velocities v, then RATTLE for the free
+     * constraints and M-RATTLE's reset of every body: writes every particle's new position
+     * and velocity (formed from the displacement) into newPositions and newVelocities. Throws
+     * an OpenMMException if a body finds no rotation or a result is not finite; x and v are
+     * not changed.
+     */
+    void driftAndReset(std::vector<OpenMM::Vec3>& x, const std::vector<OpenMM::Vec3>& v, double h, double tolerance,
+                       std::vector<OpenMM::Vec3>& newPositions, std::vector<OpenMM::Vec3>& newVelocities);
     /** RATTLE position step for free-particle constraints: moves newPositions onto the constraints. */
     void constrainFreePositions(std::vector<OpenMM::Vec3>& oldPositions, std::vector<OpenMM::Vec3>& newPositions,
                                 double tolerance);
@@ -78,6 +87,15 @@ public:
      * its atoms from this kernel's random stream, then every velocity is made rigid.
      */
     void collideBodies(OpenMM::ContextImpl& context, double tolerance);
+    /**
+     * The kernel's random stream (Andersen body collisions, Langevin noise). It is seeded from
+     * an AndersenThermostat's seed when the System has one; otherwise seedRandom() seeds it
+     * unless a checkpoint has already restored it.
+     */
+    std::mt19937_64& random() {
+        return collisionRandom;
+    }
+    void seedRandom(int seed);
     /** The random stream, for checkpoints. */
     void writeState(std::ostream& stream) const;
     void readState(std::istream& stream);
@@ -89,6 +107,7 @@ private:
     std::unique_ptr<OpenMM::ReferenceConstraints> freeConstraints;
     bool andersen = false;
     std::mt19937_64 collisionRandom;
+    bool randomIsSet = false;
 };
 
 /** Raw 3N-double view of a Vec3 array, for the numerical core. */

@@ -27,6 +27,7 @@ public:
         dynamics.reset(new ReferenceRigidBodyDynamics(system, topology));
         newPositions.resize(system.getNumParticles());
         newVelocities.resize(system.getNumParticles());
+        kicked.resize(system.getNumParticles());
     }
     void execute(OpenMM::ContextImpl& context, const RigidBodyIntegrator& integrator, bool& forcesAreValid) override {
         const double tolerance = integrator.getConstraintTolerance();
@@ -93,7 +94,7 @@ protected:
     virtual void integratePositions(OpenMM::ContextImpl& context, const RigidBodyIntegrator& integrator) = 0;
 
     std::unique_ptr<ReferenceRigidBodyDynamics> dynamics;
-    std::vector<OpenMM::Vec3> newPositions, newVelocities;  // step buffers
+    std::vector<OpenMM::Vec3> newPositions, newVelocities, kicked;  // step buffers
 };
 
 } // namespace MRattlePlugin

@@ -1,5 +1,6 @@
 #include "ReferenceMRattleKernelFactory.h"
 #include "ReferenceMRattleKernels.h"
+#include "ReferenceMRattleLangevinKernels.h"
 #include "ReferenceRigidSplittingKernels.h"
 #include "internal/OpenMMVersionCheck.h"
 #include "openmm/OpenMMException.h"
@@ -15,6 +16,8 @@ KernelImpl* ReferenceMRattleKernelFactory::createKernelImpl(std::string name, co
         return new ReferenceIntegrateMRattleStepKernel(name, platform);
     if (name == IntegrateRigidSplittingStepKernel::Name())
         return new ReferenceIntegrateRigidSplittingStepKernel(name, platform);
+    if (name == IntegrateMRattleLangevinStepKernel::Name())
+        return new ReferenceIntegrateMRattleLangevinStepKernel(name, platform);
     throw OpenMMException("ReferenceMRattleKernelFactory: no kernel named '" + name + "'");
 }
 
@@ -34,6 +37,7 @@ void registerOnReferenceAndCpu() {
             ReferenceMRattleKernelFactory* factory = new ReferenceMRattleKernelFactory();
             platform.registerKernelFactory(IntegrateMRattleStepKernel::Name(), factory);
             platform.registerKernelFactory(IntegrateRigidSplittingStepKernel::Name(), factory);
+            platform.registerKernelFactory(IntegrateMRattleLangevinStepKernel::Name(), factory);
         }
     }
 }

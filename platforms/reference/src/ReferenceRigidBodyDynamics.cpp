@@ -50,6 +50,7 @@ ReferenceRigidBodyDynamics::ReferenceRigidBodyDynamics(const System& system, con
             andersen = true;
             int seed = thermostat->getRandomNumberSeed();
             collisionRandom.seed(seed != 0 ? (uint64_t) seed : (uint64_t) std::random_device()());
+            randomIsSet = true;
         }
 }
 
@@ -92,6 +93,41 @@ int ReferenceRigidBodyDynamics::getBodyDegreesOfFreedom() const {
     for (RigidBodyMath::Shape shape : shapes)
         dof += RigidBodyMath::degreesOfFreedom(shape);
     return dof;
+}
+
+void ReferenceRigidBodyDynamics::seedRandom(int seed) {
+    if (randomIsSet)
+        return;
+    collisionRandom.seed(seed != 0 ? (uint64_t) seed : (uint64_t) std::random_device()());
+    randomIsSet = true;
+}
+
+void ReferenceRigidBodyDynamics::driftAndReset(vector<Vec3>& x, const vector<Vec3>& v, double h, double tolerance,
+                                               vector<Vec3>& newPositions, vector<Vec3>& newVelocities) {
+    const int n = x.size();
+    for (int i = 0; i < n; i++) {
+        newVelocities[i] = v[i];
+        newPositions[i] = (inverseMass[i] != 0 ? x[i] + v[i] * h : x[i]);
+    }
+    // Free particles: RATTLE for their constraints, velocities from the displacement.
+    constrainFreePositions(x, newPositions, tolerance);
+    const double inverseStep = 1.0 / h;
+    for (int i : bodies.getFreeParticles()) {
+        newVelocities[i] = (newPositions[i] - x[i]) * inverseStep;
+        if (!std::isfinite(newPositions[i][0] + newPositions[i][1] + newPositions[i][2] + newVelocities[i][0] +
+                           newVelocities[i][1] + newVelocities[i][2]))
+            throw OpenMMException("particle " + std::to_string(i) +
+                                  " would move to a position that is not finite; its force or velocity is not finite");
+    }
+    // Bodies: M-RATTLE's reset, new positions and velocities formed from displacements.
+    for (int b = 0; b < bodies.getNumBodies(); b++) {
+        RigidBodyMath::RotationSolve solve =
+            RigidBodyMath::driftAndResetBody(view(b), h, coordinates(x), coordinates(newVelocities), coordinates(newPositions));
+        if (!solve.converged)
+            throw OpenMMException("the position reset of rigid body " + std::to_string(b) + " found no rotation in " +
+                                  std::to_string(RigidBodyMath::MaxRotationIterations) +
+                                  " Newton iterations; the step size is too large for the forces, or they are not finite");
+    }
 }
 
 void ReferenceRigidBodyDynamics::constrainFreePositions(vector<Vec3>& oldPositions, vector<Vec3>& newPositions,
@@ -228,4 +264,5 @@ void ReferenceRigidBodyDynamics::readState(std::istream& stream) {
     if (text.fail())
         throw OpenMMException("the checkpoint's kernel data is malformed (its random state cannot be read)");
     collisionRandom = generator;
+    randomIsSet = true;
 }

@@ -1,0 +1,32 @@
+#include "MRattleLangevinIntegrator.h"
+#include "internal/RigidBodyKernels.h"
+#include "openmm/OpenMMException.h"
+#include <cmath>
+#include <string>
+
+using namespace MRattlePlugin;
+using namespace OpenMM;
+
+MRattleLangevinIntegrator::MRattleLangevinIntegrator(double temperature, double frictionCoeff, double stepSize) {
+    setTemperature(temperature);
+    setFriction(frictionCoeff);
+    setStepSize(stepSize);
+}
+
+void MRattleLangevinIntegrator::setTemperature(double value) {
+    if (!(value >= 0) || !std::isfinite(value))
+        throw OpenMMException("MRattleLangevinIntegrator: the temperature must be a finite number >= 0 K, got " +
+                              std::to_string(value));
+    temperature = value;
+}
+
+void MRattleLangevinIntegrator::setFriction(double coeff) {
+    if (!(coeff >= 0) || !std::isfinite(coeff))
+        throw OpenMMException("MRattleLangevinIntegrator: the friction must be a finite number >= 0 /ps, got " +
+                              std::to_string(coeff));
+    friction = coeff;
+}
+
+std::string MRattleLangevinIntegrator::getStepKernelName() const {
+    return IntegrateMRattleLangevinStepKernel::Name();
+}

@@ -1,0 +1,29 @@
+#ifndef MRATTLE_REFERENCE_LANGEVIN_KERNELS_H_
+#define MRATTLE_REFERENCE_LANGEVIN_KERNELS_H_
+
+#include "ReferenceRigidBodyStepKernel.h"
+#include "internal/RigidBodyKernels.h"
+
+namespace MRattlePlugin {
+
+/**
+ * Langevin dynamics with M-RATTLE on the Reference platform, also registered on the CPU
+ * platform. Leapfrog like LangevinMiddleIntegrator: the velocities it keeps are those of
+ * the middle of the step (after the noise), so its step is a full kick and there is no
+ * closing half kick.
+ */
+class ReferenceIntegrateMRattleLangevinStepKernel : public ReferenceRigidBodyStepKernel<IntegrateMRattleLangevinStepKernel> {
+public:
+    using ReferenceRigidBodyStepKernel::ReferenceRigidBodyStepKernel;
+    void execute(OpenMM::ContextImpl& context, const RigidBodyIntegrator& integrator, bool& forcesAreValid) override;
+
+protected:
+    void integratePositions(OpenMM::ContextImpl& context, const RigidBodyIntegrator& integrator) override;
+
+private:
+    std::vector<OpenMM::Vec3> middlePositions, middleVelocities;
+};
+
+} // namespace MRattlePlugin
+
+#endif
