@@ -91,7 +91,7 @@ void RigidBodyIntegrator::initialize(ContextImpl& contextRef) {
     context = &contextRef;
     owner = &contextRef.getOwner();
     kernel = contextRef.getPlatform().createKernel(getStepKernelName(), contextRef);
-    kernel.getAs<RigidBodyKernel>().initialize(system, topology);
+    kernel.getAs<RigidBodyKernel>().initialize(system, topology, *this);
     forcesAreValid = false;
     velocitiesNeedProjection = false;
     lastStepCount = -1;

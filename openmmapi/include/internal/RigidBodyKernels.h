@@ -32,9 +32,11 @@ public:
     }
     ~RigidBodyKernel() override;
     /**
-     * @param topology  the bodies in effect; the kernel keeps a copy
+     * @param topology    the bodies in effect; the kernel keeps a copy
+     * @param integrator  the integrator (its settings at this point, e.g. a random seed)
      */
-    virtual void initialize(const OpenMM::System& system, const RigidBodyTopology& topology) = 0;
+    virtual void initialize(const OpenMM::System& system, const RigidBodyTopology& topology,
+                            const RigidBodyIntegrator& integrator) = 0;
     /**
      * One step: with an AndersenThermostat in the System, bodies with a collided atom first
      * get fresh thermal velocities as a whole; then the forces (unless forcesAreValid), the

@@ -11,18 +11,21 @@
 namespace MRattlePlugin {
 
 /**
- * M-RATTLE on OpenMM's common compute platforms (OpenCL here, CUDA where built): the
- * step, projection and shapes run on the device, one work item per body. Body and
+ * M-RATTLE (MRattleIntegrator) and Langevin dynamics with M-RATTLE
+ * (MRattleLangevinIntegrator) on OpenMM's common compute platforms (OpenCL here, CUDA
+ * where built): the step, projection and shapes run on the device, one work item per body.
+ * One class serves both kernel names (the integrator tells which step to take). Body and
  * constraint atom lists are kept in the System's atom order and mapped to the device's
  * (reordered) atom order whenever OpenMM reorders atoms.
  */
-class CommonIntegrateMRattleStepKernel : public IntegrateMRattleStepKernel {
+class CommonIntegrateMRattleStepKernel : public RigidBodyKernel {
 public:
     CommonIntegrateMRattleStepKernel(const std::string& name, const OpenMM::Platform& platform, OpenMM::ComputeContext& cc)
-        : IntegrateMRattleStepKernel(name, platform), cc(cc) {
+        : RigidBodyKernel(name, platform), cc(cc) {
     }
     ~CommonIntegrateMRattleStepKernel() override;
-    void initialize(const OpenMM::System& system, const RigidBodyTopology& topology) override;
+    void initialize(const OpenMM::System& system, const RigidBodyTopology& topology,
+                    const RigidBodyIntegrator& integrator) override;
     void execute(OpenMM::ContextImpl& context, const RigidBodyIntegrator& integrator, bool& forcesAreValid) override;
     void updateShapes(OpenMM::ContextImpl& context) override;
     void projectVelocities(OpenMM::ContextImpl& context, double tolerance) override;
@@ -43,6 +46,11 @@ private:
     void setKernelArguments();
     /** Run the body projection (and free-constraint velocity step) on the Context's velocities. */
     void project(double tolerance, bool onlyIfNotRigid, bool collide, double kT);
+    /** A kick over kickTime, a drift over h, the resets and free constraints, written unless something failed. */
+    void driftAndReset(double kickTime, double h, double tolerance, int step);
+    /** A kick of the Context's velocities over kickTime. */
+    void kick(double kickTime);
+    void setMixedArg(OpenMM::ComputeKernel& kernel, int index, double value);
 
     OpenMM::ComputeContext& cc;
     RigidBodyTopology topology;
@@ -53,9 +61,10 @@ private:
     bool hasAndersen = false, argumentsSet = false;
     int stepsSinceFailureCheck = 0;
     OpenMM::ComputeArray bodyStart, bodyAtoms, bodyLinear, clusterStart, constraintAtoms, constraintDistance;
-    OpenMM::ComputeArray newVelocity, failure;
+    OpenMM::ComputeArray newVelocity, failure, posqBackup, correctionBackup, velmBackup;
     OpenMM::ComputeKernel kickAndDrift, resetBodies, constrainFreePositions, applyPositionStep, kickVelocities,
-        projectBodies, constrainFreeVelocities;
+        projectBodies, constrainFreeVelocities, langevinNoise, backupState;
+    bool langevin = false;
 };
 
 } // namespace MRattlePlugin

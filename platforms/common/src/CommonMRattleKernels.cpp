@@ -1,5 +1,6 @@
 #include "CommonMRattleKernels.h"
 #include "CommonMRattleKernelSources.h"
+#include "MRattleLangevinIntegrator.h"
 #include "RigidBodyIntegrator.h"
 #include "mrattle/RigidBodyMath.h"
 #include "openmm/AndersenThermostat.h"
@@ -78,9 +79,12 @@ private:
 CommonIntegrateMRattleStepKernel::~CommonIntegrateMRattleStepKernel() {
 }
 
-void CommonIntegrateMRattleStepKernel::initialize(const System& system, const RigidBodyTopology& bodies) {
+void CommonIntegrateMRattleStepKernel::initialize(const System& system, const RigidBodyTopology& bodies,
+                                                  const RigidBodyIntegrator& integrator) {
     cc.initializeContexts();
     ContextSelector selector(cc);
+    const MRattleLangevinIntegrator* langevinIntegrator = dynamic_cast<const MRattleLangevinIntegrator*>(&integrator);
+    langevin = (langevinIntegrator != nullptr);
     topology = bodies;
     numBodies = topology.getNumBodies();
     shapes.assign(numBodies, RigidBodyMath::Shape::General);
@@ -129,6 +133,15 @@ void CommonIntegrateMRattleStepKernel::initialize(const System& system, const Ri
             hasAndersen = true;
             cc.getIntegrationUtilities().initRandomNumberGenerator(thermostat->getRandomNumberSeed());
         }
+    if (langevin) {
+        // Now, not at the first step: OpenMM's checkpoints hold the device random state only
+        // once the generator exists, so a new Context must have it before loading one.
+        cc.getIntegrationUtilities().initRandomNumberGenerator(langevinIntegrator->getRandomNumberSeed());
+        const int vectorSize = doubleMixed ? sizeof(mm_double4) : sizeof(mm_float4);
+        posqBackup.initialize(cc, cc.getPaddedNumAtoms(), cc.getPosq().getElementSize(), "mrattlePosqBackup");
+        correctionBackup.initialize(cc, cc.getPaddedNumAtoms(), cc.getPosq().getElementSize(), "mrattleCorrectionBackup");
+        velmBackup.initialize(cc, cc.getPaddedNumAtoms(), vectorSize, "mrattleVelmBackup");
+    }
     std::map<std::string, std::string> defines;
     if (doubleMixed)
         defines["USE_DOUBLE_MIXED"] = "1";
@@ -140,6 +153,8 @@ void CommonIntegrateMRattleStepKernel::initialize(const System& system, const Ri
     kickVelocities = program->createKernel("kickVelocities");
     projectBodies = program->createKernel("projectBodies");
     constrainFreeVelocities = program->createKernel("constrainFreeVelocities");
+    langevinNoise = program->createKernel("langevinNoise");
+    backupState = program->createKernel("backupState");
 }
 
 void CommonIntegrateMRattleStepKernel::mapAtoms() {
@@ -180,19 +195,20 @@ void CommonIntegrateMRattleStepKernel::setKernelArguments() {
     };
     kickAndDrift->addArg(numAtoms);
     kickAndDrift->addArg(padded);
-    kickAndDrift->addArg(integration.getStepSize());
+    addMixed(kickAndDrift, 0.0);  // 2: kick time
+    addMixed(kickAndDrift, 0.0);  // 3: drift time
     kickAndDrift->addArg(cc.getVelm());
     kickAndDrift->addArg(cc.getLongForceBuffer());
     kickAndDrift->addArg(integration.getPosDelta());
     kickAndDrift->addArg(newVelocity);
     kickAndDrift->addArg(failure);
-    kickAndDrift->addArg(0);  // 8: the step
+    kickAndDrift->addArg(0);  // 9: the step
 
     resetBodies->addArg(numBodies);
     resetBodies->addArg(bodyStart);
     resetBodies->addArg(bodyAtoms);
     resetBodies->addArg(bodyLinear);
-    resetBodies->addArg(integration.getStepSize());
+    addMixed(resetBodies, 0.0);  // 4: drift time
     resetBodies->addArg(cc.getPosq());
     resetBodies->addArg(cc.getUseMixedPrecision() ? cc.getPosqCorrection() : cc.getPosq());
     resetBodies->addArg(integration.getPosDelta());
@@ -204,7 +220,7 @@ void CommonIntegrateMRattleStepKernel::setKernelArguments() {
     constrainFreePositions->addArg(clusterStart);
     constrainFreePositions->addArg(constraintAtoms);
     constrainFreePositions->addArg(constraintDistance);
-    constrainFreePositions->addArg(integration.getStepSize());
+    addMixed(constrainFreePositions, 0.0);  // 4: drift time
     constrainFreePositions->addArg(cc.getPosq());
     constrainFreePositions->addArg(cc.getUseMixedPrecision() ? cc.getPosqCorrection() : cc.getPosq());
     constrainFreePositions->addArg(integration.getPosDelta());
@@ -223,7 +239,7 @@ void CommonIntegrateMRattleStepKernel::setKernelArguments() {
 
     kickVelocities->addArg(numAtoms);
     kickVelocities->addArg(padded);
-    kickVelocities->addArg(integration.getStepSize());
+    addMixed(kickVelocities, 0.0);  // 2: kick time
     kickVelocities->addArg(cc.getVelm());
     kickVelocities->addArg(cc.getLongForceBuffer());
     kickVelocities->addArg(failure);
@@ -254,6 +270,27 @@ void CommonIntegrateMRattleStepKernel::setKernelArguments() {
     addMixed(constrainFreeVelocities, 1e-5);  // 6: the tolerance
     constrainFreeVelocities->addArg(failure);
     constrainFreeVelocities->addArg(0);  // 8: the step
+
+    langevinNoise->addArg(numAtoms);
+    langevinNoise->addArg(cc.getVelm());
+    addMixed(langevinNoise, 1.0);  // 2: a = exp(-friction h)
+    addMixed(langevinNoise, 0.0);  // 3: sqrt((1 - a^2) kT)
+    if (langevin)
+        langevinNoise->addArg(integration.getRandom());
+    else
+        langevinNoise->addArg(failure);  // never launched without Langevin
+    langevinNoise->addArg(0u);  // 5: random index
+    langevinNoise->addArg(failure);
+    if (langevin) {
+        backupState->addArg(numAtoms);
+        backupState->addArg(cc.getPosq());
+        backupState->addArg(cc.getUseMixedPrecision() ? cc.getPosqCorrection() : cc.getPosq());
+        backupState->addArg(cc.getVelm());
+        backupState->addArg(posqBackup);
+        backupState->addArg(correctionBackup);
+        backupState->addArg(velmBackup);
+        backupState->addArg(failure);
+    }
     argumentsSet = true;
 }
 
@@ -282,6 +319,38 @@ void CommonIntegrateMRattleStepKernel::project(double tolerance, bool onlyIfNotR
     }
 }
 
+void CommonIntegrateMRattleStepKernel::setMixedArg(ComputeKernel& kernel, int index, double value) {
+    if (cc.getUseDoublePrecision() || cc.getUseMixedPrecision())
+        kernel->setArg(index, value);
+    else
+        kernel->setArg(index, (float) value);
+}
+
+void CommonIntegrateMRattleStepKernel::driftAndReset(double kickTime, double h, double tolerance, int step) {
+    const int numAtoms = cc.getNumAtoms();
+    setMixedArg(kickAndDrift, 2, kickTime);
+    setMixedArg(kickAndDrift, 3, h);
+    kickAndDrift->setArg(9, step);
+    kickAndDrift->execute(numAtoms);
+    if (numBodies > 0) {
+        setMixedArg(resetBodies, 4, h);
+        resetBodies->setArg(10, step);
+        resetBodies->execute(numBodies);
+    }
+    if (numClusters > 0) {
+        setMixedArg(constrainFreePositions, 4, h);
+        setMixedArg(constrainFreePositions, 9, tolerance);
+        constrainFreePositions->setArg(11, step);
+        constrainFreePositions->execute(numClusters);
+    }
+    applyPositionStep->execute(numAtoms);
+}
+
+void CommonIntegrateMRattleStepKernel::kick(double kickTime) {
+    setMixedArg(kickVelocities, 2, kickTime);
+    kickVelocities->execute(cc.getNumAtoms());
+}
+
 void CommonIntegrateMRattleStepKernel::execute(ContextImpl& context, const RigidBodyIntegrator& integrator,
                                                bool& forcesAreValid) {
     ContextSelector selector(cc);
@@ -289,34 +358,47 @@ void CommonIntegrateMRattleStepKernel::execute(ContextImpl& context, const Rigid
         setKernelArguments();
     IntegrationUtilities& integration = cc.getIntegrationUtilities();
     const double h = integrator.getStepSize(), tolerance = integrator.getConstraintTolerance();
-    const int numAtoms = cc.getNumAtoms();
     const int step = (int) cc.getStepCount();
-    const bool doubleMixed = cc.getUseDoublePrecision() || cc.getUseMixedPrecision();
     integration.setNextStepSize(h);
     if (hasAndersen)
         project(tolerance, true, true, BOLTZ * context.getParameter(AndersenThermostat::Temperature()));
     if (!forcesAreValid)
         context.calcForcesAndEnergy(true, false, integrator.getIntegrationForceGroups());
-    kickAndDrift->setArg(8, step);
-    kickAndDrift->execute(numAtoms);
-    if (numBodies > 0) {
-        resetBodies->setArg(10, step);
-        resetBodies->execute(numBodies);
+    if (!langevin) {
+        // Velocity Verlet: half kick, drift and reset, new forces, half kick and projection.
+        driftAndReset(0.5 * h, h, tolerance, step);
+        integration.computeVirtualSites();
+        forcesAreValid = false;
+        context.calcForcesAndEnergy(true, false, integrator.getIntegrationForceGroups());
+        kick(0.5 * h);
+        project(tolerance, false, false, 0.0);
     }
-    if (numClusters > 0) {
-        if (doubleMixed)
-            constrainFreePositions->setArg(9, tolerance);
-        else
-            constrainFreePositions->setArg(9, (float) tolerance);
-        constrainFreePositions->setArg(11, step);
-        constrainFreePositions->execute(numClusters);
+    else {
+        // LangevinMiddle: kick and projection, half drift and reset, noise and projection,
+        // half drift and reset, projection; the state is backed up first, because it is
+        // written in the middle of the step and a failure must leave the state before it.
+        const MRattleLangevinIntegrator& settings = dynamic_cast<const MRattleLangevinIntegrator&>(integrator);
+        backupState->execute(cc.getNumAtoms());
+        kick(h);
+        project(tolerance, false, false, 0.0);
+        const double friction = settings.getFriction();
+        if (friction == 0)
+            driftAndReset(0.0, h, tolerance, step);
+        else {
+            driftAndReset(0.0, 0.5 * h, tolerance, step);
+            const double a = std::exp(-friction * h);
+            setMixedArg(langevinNoise, 2, a);
+            setMixedArg(langevinNoise, 3, std::sqrt((1 - a * a) * BOLTZ * settings.getTemperature()));
+            langevinNoise->setArg(5, (unsigned int) integration.prepareRandomNumbers(cc.getPaddedNumAtoms()));
+            langevinNoise->execute(cc.getNumAtoms());
+            project(tolerance, false, false, 0.0);
+            driftAndReset(0.0, 0.5 * h, tolerance, step);
+        }
+        project(tolerance, false, false, 0.0);
+        integration.computeVirtualSites();
+        forcesAreValid = false;
+        context.calcForcesAndEnergy(true, false, integrator.getIntegrationForceGroups());
     }
-    applyPositionStep->execute(numAtoms);
-    integration.computeVirtualSites();
-    forcesAreValid = false;
-    context.calcForcesAndEnergy(true, false, integrator.getIntegrationForceGroups());
-    kickVelocities->execute(numAtoms);
-    project(tolerance, false, false, 0.0);
     forcesAreValid = true;
     cc.setTime(cc.getTime() + h);
     cc.setStepCount(cc.getStepCount() + 1);
@@ -334,6 +416,13 @@ void CommonIntegrateMRattleStepKernel::checkFailure() {
     // The device has done nothing since the failed step: put the clock back to it.
     const long long failedStep = value - 1;
     const double h = cc.getIntegrationUtilities().getLastStepSize();
+    if (langevin) {
+        // The Langevin step writes the state in its middle: put back the copy from its start.
+        posqBackup.copyTo(cc.getPosq());
+        if (cc.getUseMixedPrecision())
+            correctionBackup.copyTo(cc.getPosqCorrection());
+        velmBackup.copyTo(cc.getVelm());
+    }
     cc.setTime(cc.getTime() - (cc.getStepCount() - failedStep) * h);
     cc.setStepCount(failedStep);
     failure.upload(vector<int>(1, 0));

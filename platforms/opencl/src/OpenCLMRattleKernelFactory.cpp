@@ -38,11 +38,11 @@ public:
         if (data.contexts.size() != 1)
             throw OpenMMException("MRattleIntegrator on OpenCL runs on one device; this Context uses " +
                                   std::to_string(data.contexts.size()) + " (set the DeviceIndex property to one device)");
-        if (name == IntegrateMRattleStepKernel::Name())
+        if (name == IntegrateMRattleStepKernel::Name() || name == IntegrateMRattleLangevinStepKernel::Name())
             return new CommonIntegrateMRattleStepKernel(name, platform, computeContext(data.contexts[0], context));
         if (name == IntegrateRigidSplittingStepKernel::Name())
             throw OpenMMException("RigidSplittingIntegrator (the paper's baseline) runs on the Reference and CPU "
-                                  "platforms only; MRattleIntegrator runs on Reference, CPU and OpenCL. Create the "
+                                  "platforms only; MRattleIntegrator and MRattleLangevinIntegrator run on Reference, CPU and OpenCL. Create the "
                                   "Context with Platform::getPlatformByName(\"CPU\") or \"Reference\".");
         throw OpenMMException("OpenCLMRattleKernelFactory: no kernel named '" + name + "'");
     }
@@ -61,6 +61,7 @@ void registerOnOpenCL() {
             // with a message naming its platforms, rather than OpenMM's generic one.
             OpenCLMRattleKernelFactory* factory = new OpenCLMRattleKernelFactory();
             platform.registerKernelFactory(IntegrateMRattleStepKernel::Name(), factory);
+            platform.registerKernelFactory(IntegrateMRattleLangevinStepKernel::Name(), factory);
             platform.registerKernelFactory(IntegrateRigidSplittingStepKernel::Name(), factory);
         }
     }

@@ -23,7 +23,8 @@ class ReferenceRigidBodyStepKernel : public StepKernel {
 public:
     ReferenceRigidBodyStepKernel(const std::string& name, const OpenMM::Platform& platform) : StepKernel(name, platform) {
     }
-    void initialize(const OpenMM::System& system, const RigidBodyTopology& topology) override {
+    void initialize(const OpenMM::System& system, const RigidBodyTopology& topology,
+                    const RigidBodyIntegrator& integrator) override {
         dynamics.reset(new ReferenceRigidBodyDynamics(system, topology));
         newPositions.resize(system.getNumParticles());
         newVelocities.resize(system.getNumParticles());

@@ -166,16 +166,15 @@ DEVICE void bodyCenterAndVelocity(int start, int end, GLOBAL const int* RESTRICT
 }
 
 /**
- * First half, per atom: half kick and drift into newVelocity and posDelta (the state
+ * Per atom: a kick over kickTime (0 for none) and a drift over h into newVelocity and posDelta (the state
  * itself is written only by applyPositionStep, once every body's reset has succeeded).
  */
-KERNEL void kickAndDrift(int numAtoms, int paddedNumAtoms, GLOBAL const mixed2* RESTRICT dt,
+KERNEL void kickAndDrift(int numAtoms, int paddedNumAtoms, mixed kickTime, mixed h,
         GLOBAL const mixed4* RESTRICT velm, GLOBAL const mm_long* RESTRICT force, GLOBAL mixed4* RESTRICT posDelta,
         GLOBAL mixed4* RESTRICT newVelocity, GLOBAL int* RESTRICT failure, int step) {
     if (failure[0] != 0)
         return;
-    const mixed h = dt[0].y;
-    const mixed scale = 0.5f*h/(mixed) 0x100000000;
+    const mixed scale = kickTime/(mixed) 0x100000000;
     for (int index = GLOBAL_ID; index < numAtoms; index += GLOBAL_SIZE) {
         mixed4 velocity = velm[index];
         if (velocity.w != 0) {
@@ -199,12 +198,11 @@ KERNEL void kickAndDrift(int numAtoms, int paddedNumAtoms, GLOBAL const mixed2* 
  * atom so that a body far from the origin loses no digits.
  */
 KERNEL void resetBodies(int numBodies, GLOBAL const int* RESTRICT bodyStart, GLOBAL const int* RESTRICT bodyAtoms,
-        GLOBAL const int* RESTRICT bodyLinear, GLOBAL const mixed2* RESTRICT dt, GLOBAL const real4* RESTRICT posq,
+        GLOBAL const int* RESTRICT bodyLinear, mixed h, GLOBAL const real4* RESTRICT posq,
         GLOBAL const real4* RESTRICT posqCorrection, GLOBAL mixed4* RESTRICT posDelta,
         GLOBAL mixed4* RESTRICT newVelocity, GLOBAL int* RESTRICT failure, int step) {
     if (failure[0] != 0)
         return;
-    const mixed h = dt[0].y;
     for (int body = GLOBAL_ID; body < numBodies; body += GLOBAL_SIZE) {
         const int start = bodyStart[body], end = bodyStart[body+1];
         mixed3 origin, center, V;
@@ -302,12 +300,12 @@ KERNEL void resetBodies(int numBodies, GLOBAL const int* RESTRICT bodyStart, GLO
  */
 KERNEL void constrainFreePositions(int numClusters, GLOBAL const int* RESTRICT clusterStart,
         GLOBAL const int2* RESTRICT constraintAtoms, GLOBAL const mixed* RESTRICT constraintDistance,
-        GLOBAL const mixed2* RESTRICT dt, GLOBAL const real4* RESTRICT posq, GLOBAL const real4* RESTRICT posqCorrection,
+        mixed h, GLOBAL const real4* RESTRICT posq, GLOBAL const real4* RESTRICT posqCorrection,
         GLOBAL mixed4* RESTRICT posDelta, GLOBAL mixed4* RESTRICT newVelocity, mixed tolerance,
         GLOBAL int* RESTRICT failure, int step) {
     if (failure[0] != 0)
         return;
-    const mixed invH = 1/dt[0].y;
+    const mixed invH = 1/h;
     for (int cluster = GLOBAL_ID; cluster < numClusters; cluster += GLOBAL_SIZE) {
         const int start = clusterStart[cluster], end = clusterStart[cluster+1];
         bool converged = false;
@@ -366,12 +364,12 @@ KERNEL void applyPositionStep(int numAtoms, GLOBAL real4* RESTRICT posq, GLOBAL 
     }
 }
 
-/** Second half, per atom: the half kick with the forces at the new positions. */
-KERNEL void kickVelocities(int numAtoms, int paddedNumAtoms, GLOBAL const mixed2* RESTRICT dt,
+/** Per atom: a kick over kickTime with the Context's forces. */
+KERNEL void kickVelocities(int numAtoms, int paddedNumAtoms, mixed kickTime,
         GLOBAL mixed4* RESTRICT velm, GLOBAL const mm_long* RESTRICT force, GLOBAL const int* RESTRICT failure) {
     if (failure[0] != 0)
         return;
-    const mixed scale = 0.5f*dt[0].y/(mixed) 0x100000000;
+    const mixed scale = kickTime/(mixed) 0x100000000;
     for (int index = GLOBAL_ID; index < numAtoms; index += GLOBAL_SIZE) {
         mixed4 velocity = velm[index];
         if (velocity.w != 0) {
@@ -499,5 +497,38 @@ KERNEL void constrainFreeVelocities(int numClusters, GLOBAL const int* RESTRICT 
         }
         if (!converged)
             recordFailure(failure, step);
+    }
+}
+
+/**
+ * Langevin's Ornstein-Uhlenbeck step, per atom: v = a v + sqrt((1 - a^2) kT / m) g with
+ * OpenMM's device Gaussian numbers; the projection onto rigid-body motion follows.
+ */
+KERNEL void langevinNoise(int numAtoms, GLOBAL mixed4* RESTRICT velm, mixed a, mixed noiseScale,
+        GLOBAL const float4* RESTRICT random, unsigned int randomIndex, GLOBAL const int* RESTRICT failure) {
+    if (failure[0] != 0)
+        return;
+    for (int index = GLOBAL_ID; index < numAtoms; index += GLOBAL_SIZE) {
+        mixed4 v = velm[index];
+        if (v.w != 0) {
+            const float4 g = random[randomIndex + index];
+            const mixed sigma = noiseScale*sqrt(v.w);
+            velm[index] = make_mixed4(a*v.x + sigma*g.x, a*v.y + sigma*g.y, a*v.z + sigma*g.z, v.w);
+        }
+    }
+}
+
+/** Copy the state at the start of a step, unless a failure was recorded (the copy then keeps the state before it). */
+KERNEL void backupState(int numAtoms, GLOBAL const real4* RESTRICT posq, GLOBAL const real4* RESTRICT posqCorrection,
+        GLOBAL const mixed4* RESTRICT velm, GLOBAL real4* RESTRICT posqBackup, GLOBAL real4* RESTRICT correctionBackup,
+        GLOBAL mixed4* RESTRICT velmBackup, GLOBAL const int* RESTRICT failure) {
+    if (failure[0] != 0)
+        return;
+    for (int index = GLOBAL_ID; index < numAtoms; index += GLOBAL_SIZE) {
+        posqBackup[index] = posq[index];
+#ifdef USE_MIXED_PRECISION
+        correctionBackup[index] = posqCorrection[index];
+#endif
+        velmBackup[index] = velm[index];
     }
 }
