@@ -42,33 +42,6 @@ def parseArguments():
     return arguments
 
 
-class ProgressBar(object):
-    """A reporter drawing a progress bar on stderr."""
-
-    def __init__(self, totalSteps, interval, stream=sys.stderr, width=40):
-        self.totalSteps, self.interval, self.stream, self.width = totalSteps, interval, stream, width
-        self.startTime = time.time()
-        # Redrawing in place needs a terminal; in a log file, one line per 10%.
-        self.interactive = hasattr(stream, 'isatty') and stream.isatty()
-        self.lastTenth = -1
-
-    def describeNextReport(self, simulation):
-        return (self.interval - simulation.currentStep % self.interval, False, False, False, False)
-
-    def report(self, simulation, state):
-        fraction = min(1.0, simulation.currentStep/self.totalSteps)
-        filled = int(round(self.width*fraction))
-        elapsed = time.time() - self.startTime
-        remaining = elapsed*(1 - fraction)/fraction if fraction > 0 else 0
-        bar = '[%s%s] %3.0f%%  %5.1f s left ' % ('#'*filled, '.'*(self.width - filled), 100*fraction, remaining)
-        if self.interactive:
-            self.stream.write('\r' + bar + ('\n' if simulation.currentStep >= self.totalSteps else ''))
-        elif int(10*fraction) > self.lastTenth:
-            self.lastTenth = int(10*fraction)
-            self.stream.write(bar + '\n')
-        self.stream.flush()
-
-
 class RigidityMonitor(object):
     """A reporter recording the largest change of any distance inside a rigid body."""
 
@@ -140,7 +113,7 @@ def main():
     rigidity = RigidityMonitor(integrator.getBodiesInEffect(), np.array(model.positions.value_in_unit(unit.nanometers)),
                                interval)
     simulation.reporters.append(rigidity)
-    simulation.reporters.append(ProgressBar(arguments.steps, max(1, arguments.steps//100)))
+    simulation.reporters.append(mrattle.ProgressReporter(arguments.steps, max(1, arguments.steps//100)))
 
     start = time.time()
     simulation.step(arguments.steps)

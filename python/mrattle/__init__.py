@@ -55,7 +55,7 @@ PLUGIN_PATH = _loadKernelPlugin(_plugin_location.PLUGIN_PATH, required=True)
 OPENCL_PLUGIN_PATH = (_loadKernelPlugin(_plugin_location.OPENCL_PLUGIN_PATH, required=False)
                       if _plugin_location.OPENCL_PLUGIN_PATH and _hasPlatform('OpenCL') else None)
 
-from .reporters import StateDataReporter, degreesOfFreedom, kineticTemperature
+from .reporters import ProgressReporter, StateDataReporter, degreesOfFreedom, kineticTemperature
 from .interactions import removeIntraBodyInteractions
 from . import models
 from .serialization import asPluginIntegrator, installXmlSerializerHooks as _installXmlSerializerHooks
@@ -63,6 +63,6 @@ from .serialization import asPluginIntegrator, installXmlSerializerHooks as _ins
 _installXmlSerializerHooks()
 
 
-__all__ = ['RigidBodyIntegrator', 'MRattleIntegrator', 'MRattleLangevinIntegrator', 'RigidSplittingIntegrator', 'StateDataReporter', 'degreesOfFreedom',
+__all__ = ['RigidBodyIntegrator', 'MRattleIntegrator', 'MRattleLangevinIntegrator', 'RigidSplittingIntegrator', 'StateDataReporter', 'ProgressReporter', 'degreesOfFreedom',
            'kineticTemperature', 'removeIntraBodyInteractions', 'asPluginIntegrator', 'models', 'PLUGIN_PATH',
            'OPENCL_PLUGIN_PATH']

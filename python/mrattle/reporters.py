@@ -1,4 +1,7 @@
-"""Reporting with the rigid-body degrees of freedom."""
+"""Reporting with the rigid-body degrees of freedom, and a progress bar."""
+import sys
+import time
+
 import openmm
 from openmm import app, unit
 
@@ -49,3 +52,30 @@ class StateDataReporter(app.StateDataReporter):
         super()._initializeConstants(simulation)
         if self._temperature and isinstance(simulation.integrator, RigidBodyIntegrator):
             self._dof = simulation.integrator.getNumDegreesOfFreedom()
+
+
+class ProgressReporter(object):
+    """A reporter drawing a progress bar with the time left on stderr (in a log file, one line per 10%)."""
+
+    def __init__(self, totalSteps, interval, stream=sys.stderr, width=40):
+        self.totalSteps, self.interval, self.stream, self.width = totalSteps, interval, stream, width
+        self.startTime = time.time()
+        # Redrawing in place needs a terminal; in a log file, one line per 10%.
+        self.interactive = hasattr(stream, 'isatty') and stream.isatty()
+        self.lastTenth = -1
+
+    def describeNextReport(self, simulation):
+        return (self.interval - simulation.currentStep % self.interval, False, False, False, False)
+
+    def report(self, simulation, state):
+        fraction = min(1.0, simulation.currentStep/self.totalSteps)
+        filled = int(round(self.width*fraction))
+        elapsed = time.time() - self.startTime
+        remaining = elapsed*(1 - fraction)/fraction if fraction > 0 else 0
+        bar = '[%s%s] %3.0f%%  %5.1f s left ' % ('#'*filled, '.'*(self.width - filled), 100*fraction, remaining)
+        if self.interactive:
+            self.stream.write('\r' + bar + ('\n' if simulation.currentStep >= self.totalSteps else ''))
+        elif int(10*fraction) > self.lastTenth:
+            self.lastTenth = int(10*fraction)
+            self.stream.write(bar + '\n')
+        self.stream.flush()

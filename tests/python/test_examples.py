@@ -61,3 +61,15 @@ def test_intra_body_speedup(tmp_path):
     rows = [line for line in result.stdout.splitlines() if line.endswith('x')]
     assert len(rows) == 4
     assert all(float(row.split()[-1].rstrip('x')) > 0 for row in rows)
+
+
+def test_langevin_water(tmp_path):
+    result = runExample('langevin_water.py', tmp_path, '--steps', '40', '--report-interval', '10', '--platform', 'CPU')
+    out = tmp_path/'out'
+    assert sorted(os.listdir(str(out))) == ['langevin_water.csv', 'langevin_water.png']
+    with open(str(out/'langevin_water.csv')) as stream:
+        rows = list(csv.reader(stream))
+    assert [int(row[0]) for row in rows[1:]] == [10, 20, 30, 40]
+    assert all(0.8 < float(row[4]) < 1.2 for row in rows[1:])  # density, g/mL
+    assert os.path.getsize(str(out/'langevin_water.png')) > 1000
+    assert '100%' in result.stderr and 'temperature' in result.stdout
