@@ -25,7 +25,7 @@ def parse():
     p.add_argument("--quick", action="store_true", help="tiny runs for CI smoke tests")
     p.add_argument("--build", default=os.path.join(ROOT, "build"), help="CMake build folder")
     p.add_argument("--out", default=None, help="output folder (default docs/, or a scratch folder with --quick)")
-    p.add_argument("--only", default="accuracy,cost,sampling,gains", help="comma-separated parts to run")
+    p.add_argument("--only", default="accuracy,cost,sampling,gains,langevin", help="comma-separated parts to run")
     return p.parse_args()
 
 
@@ -33,7 +33,7 @@ def main():
     args = parse()
     sys.path.insert(0, os.path.join(args.build, "python"))
     sys.path.insert(0, HERE)
-    from suite import accuracy, common, cost, gains, sampling
+    from suite import accuracy, common, cost, gains, langevin, sampling
 
     out = args.out or (os.path.join(args.build, "results-quick") if args.quick else os.path.join(ROOT, "docs"))
     results_dir = os.path.join(out, "results")
@@ -124,6 +124,10 @@ def main():
                               10.0 if not q else 0.1, 10.0 if not q else 0.1, log)
         write_csv(os.path.join(results_dir, "gains_liquid_benzene.csv"), grows)
         md += gains_section(grows, q)
+
+    if "langevin" in parts:
+        log("langevin: validation against LangevinMiddle + SETTLE (water NVT, NPT; liquid benzene)")
+        md += langevin.run(q, os.path.join(results_dir, "langevin"), log)
 
     md.append("\nTotal wall time of this run: %.1f minutes.\n" % ((time.time() - started) / 60))
     with open(os.path.join(out, "results.md"), "w") as f:

@@ -55,3 +55,15 @@ def test_quick_suite_writes_every_section(tmp_path):
         if r["method"] == "M-RATTLE":
             assert r["failure"] == ""
             assert float(r["rigidity_nm"]) < 1e-10
+
+
+def test_quick_langevin_validation_writes_its_section(tmp_path):
+    subprocess.run([sys.executable, os.path.join(ROOT, "benchmarks", "run_suite.py"), "--quick", "--build", BUILD,
+                    "--out", str(tmp_path), "--only", "langevin"], check=True, timeout=600)
+    text = (tmp_path / "results.md").read_text()
+    assert "## Langevin dynamics with M-RATTLE" in text and "density at 1 bar" in text and "liquid benzene" in text
+    rows = {r["quantity"]: r for r in read(tmp_path / "results" / "langevin.csv")}
+    # Short runs conclude nothing, but the numbers are physical.
+    assert 200 < float(rows["T"]["mrattle"]) < 400 and 200 < float(rows["T"]["settle"]) < 400
+    assert 0.8 < float(rows["density"]["mrattle"]) < 1.2
+    assert 1.5 < float(rows["gOO_peak"]["mrattle"]) < 4

@@ -1,0 +1,229 @@
+"""Validation of MRattleLangevinIntegrator on OpenMM's own inputs, against OpenMM's
+LangevinMiddleIntegrator with SETTLE on the same System (see benchmarks/langevin_validation.py)."""
+import csv
+import math
+import os
+import sys
+import time
+
+import numpy as np
+import openmm
+from openmm import app, unit
+
+import mrattle
+
+KB = 0.0083144626  # kJ/mol/K
+
+
+def block_mean(values, blocks=10):
+    """Mean and its standard error from block averages."""
+    values = np.asarray(values, dtype=float)
+    n = len(values) // blocks
+    means = values[:n * blocks].reshape(blocks, n).mean(axis=1)
+    return means.mean(), means.std(ddof=1) / math.sqrt(blocks)
+
+
+def water_system(barostat=False):
+    pdb = app.PDBFile(os.path.join(os.path.dirname(app.__file__), 'data', 'tip3p.pdb'))
+    forcefield = app.ForceField('amber14/tip3p.xml')
+    system = forcefield.createSystem(pdb.topology, nonbondedMethod=app.PME, nonbondedCutoff=0.9 * unit.nanometers,
+                                     rigidWater=True)
+    if barostat:
+        system.addForce(openmm.MonteCarloBarostat(1 * unit.bar, 300 * unit.kelvin, 25))
+    return pdb, system
+
+
+def exact_geometry(system, positions):
+    """The positions with every water at exactly TIP3P's geometry (OpenMM's SETTLE through
+    applyConstraints): the PDB's waters are slightly off it, and M-RATTLE keeps the shapes it
+    is given (issue 12), so both methods start from the same molecules."""
+    context = openmm.Context(system, openmm.VerletIntegrator(0.001), openmm.Platform.getPlatformByName('Reference'))
+    context.setPositions(positions)
+    context.applyConstraints(1e-12)
+    return context.getState(getPositions=True).getPositions()
+
+
+def bodies_of(topology):
+    return [[atom.index for atom in residue.atoms()] for residue in topology.residues()]
+
+
+def temperatures(velocities, masses, bodies, dof_total, removes_cm):
+    """Kinetic, translational and rotational temperatures of rigid bodies (nonlinear)."""
+    kinetic = 0.5 * np.sum(masses[:, None] * velocities ** 2)
+    translational = 0.0
+    for body in bodies:
+        m = masses[body]
+        momentum = (m[:, None] * velocities[body]).sum(axis=0)
+        translational += 0.5 * momentum.dot(momentum) / m.sum()
+    n = len(bodies)
+    dof_trans = 3 * n - (3 if removes_cm else 0)
+    dof_rot = 3 * n
+    return (2 * kinetic / (dof_total * KB), 2 * translational / (dof_trans * KB),
+            2 * (kinetic - translational) / (dof_rot * KB))
+
+
+def oo_peak(frames, oxygens, box):
+    """Height and position of the first peak of the O-O g(r)."""
+    edges = np.arange(0.2, 0.45, 0.005)
+    counts = np.zeros(len(edges) - 1)
+    for x in frames:
+        o = x[oxygens]
+        for i in range(len(o) - 1):
+            d = o[i + 1:] - o[i]
+            d -= box * np.round(d / box)
+            r = np.sqrt((d * d).sum(axis=1))
+            counts += np.histogram(r, edges)[0]
+    n = len(oxygens)
+    shell = 4 / 3 * math.pi * (edges[1:] ** 3 - edges[:-1] ** 3)
+    g = counts / (len(frames) * 0.5 * n * (n - 1) / box ** 3 * shell)
+    k = int(np.argmax(g))
+    return g[k], 0.5 * (edges[k] + edges[k + 1])
+
+
+def run_water(method, barostat, equilibrate, production, sample, seed, log):
+    pdb, system = water_system(barostat)
+    if method == 'M-RATTLE Langevin':
+        integrator = mrattle.MRattleLangevinIntegrator(300 * unit.kelvin, 1 / unit.picosecond, 2 * unit.femtoseconds)
+    else:
+        integrator = openmm.LangevinMiddleIntegrator(300 * unit.kelvin, 1 / unit.picosecond, 2 * unit.femtoseconds)
+    integrator.setRandomNumberSeed(seed)
+    platform = openmm.Platform.getPlatformByName('CPU')
+    context = openmm.Context(system, integrator, platform)
+    context.setPositions(exact_geometry(system, pdb.positions))
+    context.setVelocitiesToTemperature(300 * unit.kelvin, seed)
+    bodies = bodies_of(pdb.topology)
+    masses = np.array([system.getParticleMass(i).value_in_unit(unit.dalton) for i in range(system.getNumParticles())])
+    removes_cm = any(isinstance(f, openmm.CMMotionRemover) for f in system.getForces())
+    dof = 6 * len(bodies) - (3 if removes_cm else 0)
+    oxygens = [b[0] for b in bodies]
+    start = time.time()
+    integrator.step(equilibrate)
+    series = {'T': [], 'Ttrans': [], 'Trot': [], 'U': [], 'density': []}
+    frames = []
+    total_mass = masses.sum() * 1.66053906660e-24  # g
+    for k in range(production // sample):
+        integrator.step(sample)
+        state = context.getState(getVelocities=True, getEnergy=True, getPositions=(k % 10 == 0))
+        v = state.getVelocities(asNumpy=True).value_in_unit(unit.nanometers / unit.picosecond)
+        t, tt, tr = temperatures(v, masses, bodies, dof, removes_cm)
+        series['T'].append(t)
+        series['Ttrans'].append(tt)
+        series['Trot'].append(tr)
+        series['U'].append(state.getPotentialEnergy().value_in_unit(unit.kilojoule_per_mole) / len(bodies))
+        a, b, c = state.getPeriodicBoxVectors(asNumpy=True).value_in_unit(unit.nanometers)
+        volume = a[0] * b[1] * c[2]
+        series['density'].append(total_mass / (volume * 1e-21))
+        if k % 10 == 0:
+            frames.append(state.getPositions(asNumpy=True).value_in_unit(unit.nanometers))
+    box = a[0]
+    result = {key: block_mean(values) for key, values in series.items()}
+    if not barostat:
+        result['peak'] = oo_peak(frames[::2], oxygens, box)
+    elapsed = time.time() - start
+    log('%-22s %s %d+%d steps in %.0f s' % (method, 'NPT' if barostat else 'NVT', equilibrate, production, elapsed))
+    return result
+
+
+def benzene_temperatures(step_fs, steps, log, equilibration_ps=20.0):
+    model = mrattle.models.benzeneLiquid()
+    integrator = mrattle.MRattleLangevinIntegrator(298 * unit.kelvin, 1 / unit.picosecond, step_fs * unit.femtoseconds)
+    integrator.setRandomNumberSeed(7)
+    context = openmm.Context(model.system, integrator, openmm.Platform.getPlatformByName('CPU'))
+    context.setPositions(model.positions)
+    context.setVelocitiesToTemperature(298 * unit.kelvin, 1)
+    bodies = integrator.getBodiesInEffect()
+    masses = np.array([model.system.getParticleMass(i).value_in_unit(unit.dalton)
+                       for i in range(model.system.getNumParticles())])
+    removes_cm = any(isinstance(f, openmm.CMMotionRemover) for f in model.system.getForces())
+    dof = integrator.getNumDegreesOfFreedom()
+    try:
+        integrator.step(int(1000 * equilibration_ps / step_fs))  # from the lattice
+        trans, rot = [], []
+        for k in range(steps):
+            integrator.step(max(1, int(20 / step_fs)))
+            v = context.getState(getVelocities=True).getVelocities(asNumpy=True).value_in_unit(
+                unit.nanometers / unit.picosecond)
+            _, tt, tr = temperatures(v, masses, bodies, dof, removes_cm)
+            if not (math.isfinite(tt) and math.isfinite(tr)):
+                return None
+            trans.append(tt)
+            rot.append(tr)
+    except openmm.OpenMMException as error:
+        log('benzene at %g fs: %s' % (step_fs, error))
+        return None
+    log('benzene at %g fs done' % step_fs)
+    return block_mean(trans), block_mean(rot)
+
+
+def run(quick, out, log):
+    """Run the validation; write out + '.csv'; return the report as markdown lines."""
+    scale = 0.02 if quick else 1.0
+    nvt = dict(equilibrate=int(5000 * scale), production=int(20000 * scale), sample=20)
+    npt = dict(equilibrate=int(10000 * scale), production=int(40000 * scale), sample=50)
+    rows = []
+    report = ['\n## Langevin dynamics with M-RATTLE: validation against LangevinMiddle + SETTLE\n',
+              'CPU platform, friction 1/ps, 2 fs, OpenMM\'s `app/data/tip3p.pdb` (895 waters, set to '
+              'exact TIP3P geometry first) with `amber14/tip3p.xml` and PME (0.9 nm). Means +- standard errors '
+              'from 10 block averages; '
+              '%s.\n' % ('a **quick** smoke run: too short to conclude anything' if quick else
+                         'NVT %d ps after %d ps, NPT %d ps after %d ps' % (
+                             nvt['production'] * 0.002, nvt['equilibrate'] * 0.002,
+                             npt['production'] * 0.002, npt['equilibrate'] * 0.002))]
+    results = {}
+    for method in ('M-RATTLE Langevin', 'LangevinMiddle + SETTLE'):
+        results[(method, 'NVT')] = run_water(method, False, seed=1, log=log, **nvt)
+        results[(method, 'NPT')] = run_water(method, True, seed=2, log=log, **npt)
+    report.append('| Quantity | M-RATTLE Langevin | LangevinMiddle + SETTLE | Target | Verdict |')
+    report.append('|---|---|---|---|---|')
+
+    def fmt(pair, digits=2):
+        return '%.*f +- %.*f' % (digits, pair[0], digits, pair[1])
+
+    m, s = results[('M-RATTLE Langevin', 'NVT')], results[('LangevinMiddle + SETTLE', 'NVT')]
+    for key, name, tolerance in (('T', 'kinetic temperature (K)', 0.01), ('Ttrans', 'translational temperature (K)', 0.02),
+                                 ('Trot', 'rotational temperature (K)', 0.02)):
+        within = abs(m[key][0] - 300) <= tolerance * 300
+        resolved = 3 * m[key][1] < tolerance * 300
+        verdict = ('within %d%% of 300 K' % round(100 * tolerance) if within else 'NOT within %d%%' % round(100 * tolerance))
+        if not resolved:
+            verdict += ' (error bar too large to resolve)'
+        report.append('| %s | %s | %s | 300 +- %d%% | %s |' % (name, fmt(m[key]), fmt(s[key]), round(100 * tolerance), verdict))
+        rows.append(dict(quantity=key, mrattle=m[key][0], mrattle_error=m[key][1], settle=s[key][0], settle_error=s[key][1]))
+    difference = m['U'][0] - s['U'][0]
+    combined = math.hypot(m['U'][1], s['U'][1])
+    report.append('| potential energy per molecule (kJ/mol) | %s | %s | equal within 3 combined SE | %s |' % (
+        fmt(m['U'], 3), fmt(s['U'], 3), 'difference %.3f = %.1f SE: %s' % (
+            difference, abs(difference) / combined, 'consistent' if abs(difference) <= 3 * combined else 'NOT consistent')))
+    rows.append(dict(quantity='U', mrattle=m['U'][0], mrattle_error=m['U'][1], settle=s['U'][0], settle_error=s['U'][1]))
+    peak_m, peak_s = m['peak'], s['peak']
+    report.append('| O-O g(r) first peak: height (position, nm) | %.3f (%.4f) | %.3f (%.4f) | heights within 3%% | %s |' % (
+        peak_m[0], peak_m[1], peak_s[0], peak_s[1], 'differ by %.1f%%' % (100 * abs(peak_m[0] / peak_s[0] - 1))))
+    rows.append(dict(quantity='gOO_peak', mrattle=peak_m[0], mrattle_error='', settle=peak_s[0], settle_error=''))
+    dm, ds = results[('M-RATTLE Langevin', 'NPT')]['density'], results[('LangevinMiddle + SETTLE', 'NPT')]['density']
+    report.append('| density at 1 bar (g/mL) | %s | %s | within 0.005 g/mL | difference %.4f +- %.4f |' % (
+        fmt(dm, 4), fmt(ds, 4), dm[0] - ds[0], math.hypot(dm[1], ds[1])))
+    rows.append(dict(quantity='density', mrattle=dm[0], mrattle_error=dm[1], settle=ds[0], settle_error=ds[1]))
+
+    report.append('\n### Rigid liquid benzene (64 molecules, PME) at 298 K\n')
+    report.append('| Step (fs) | translational T (K) | rotational T (K) | within 2% of 298 K |')
+    report.append('|---|---|---|---|')
+    largest_stable = None
+    for step in (2, 4, 8, 12, 16):
+        result = benzene_temperatures(step, int(500 * (0.04 if quick else 1)), log, 0.2 if quick else 20.0)
+        if result is None:
+            report.append('| %d | unstable | unstable | no |' % step)
+            continue
+        largest_stable = step
+        (tt, te), (tr, re) = result
+        ok = abs(tt - 298) <= 0.02 * 298 and abs(tr - 298) <= 0.02 * 298
+        report.append('| %d | %.1f +- %.1f | %.1f +- %.1f | %s |' % (step, tt, te, tr, re, 'yes' if ok else 'no'))
+        rows.append(dict(quantity='benzene_%dfs' % step, mrattle=tt, mrattle_error=te, settle=tr, settle_error=re))
+    report.append('\nLargest step tried that stayed stable for the run: %s fs.' % largest_stable)
+    os.makedirs(os.path.dirname(os.path.abspath(out)), exist_ok=True)
+    with open(out + '.csv', 'w', newline='') as stream:
+        writer = csv.DictWriter(stream, fieldnames=['quantity', 'mrattle', 'mrattle_error', 'settle', 'settle_error'])
+        writer.writeheader()
+        writer.writerows(rows)
+    return report
+
+
