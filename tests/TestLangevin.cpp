@@ -55,7 +55,11 @@ Cluster mixedBodiesAndConstraints() {
 }
 
 double kineticTemperature(Context& context, int dof) {
-    return 2 * context.getState(State::Energy).getKineticEnergy() / (dof * BOLTZ);
+    const double temperature = 2 * context.getState(State::Energy).getKineticEnergy() / (dof * BOLTZ);
+    // The integrator's own (what OpenMM 8's StateDataReporter reports) is the same number.
+    RigidBodyIntegrator& integrator = dynamic_cast<RigidBodyIntegrator&>(context.getIntegrator());
+    EXPECT_NEAR(temperature, integrator.computeSystemTemperature(), 1e-9 * temperature);
+    return temperature;
 }
 
 } // namespace

@@ -42,6 +42,13 @@ public:
     const std::vector<int>& getFreeParticles() const;
     /** Degrees of freedom of the bound Context's System under this integrator. */
     int getNumDegreesOfFreedom() const;
+    /**
+     * The instantaneous temperature 2 KE / (DOF k_B) with this integrator's degrees of
+     * freedom, in Kelvin. OpenMM 8's StateDataReporter uses it when an integrator has it, so
+     * it then reports the right temperature for rigid bodies (OpenMM 7.7's counts 3 per
+     * particle minus constraints: use mrattle.StateDataReporter there).
+     */
+    double computeSystemTemperature();
     /** The body topology in effect (throws if not bound). */
     const RigidBodyTopology& getTopology() const;
     /**

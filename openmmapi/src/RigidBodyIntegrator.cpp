@@ -5,6 +5,7 @@
 #include "openmm/CompoundIntegrator.h"
 #include "openmm/OpenMMException.h"
 #include "openmm/internal/ContextImpl.h"
+#include "openmm/reference/SimTKOpenMMRealType.h"
 #include <cmath>
 #include <sstream>
 
@@ -80,6 +81,14 @@ const vector<int>& RigidBodyIntegrator::getFreeParticles() const {
 
 int RigidBodyIntegrator::getNumDegreesOfFreedom() const {
     return getTopology().getNumDegreesOfFreedom(kernel.getAs<const RigidBodyKernel>().getBodyDegreesOfFreedom());
+}
+
+double RigidBodyIntegrator::computeSystemTemperature() {
+    requireContext();
+    const int dof = getNumDegreesOfFreedom();
+    if (dof <= 0)
+        return 0.0;
+    return 2 * computeKineticEnergy() / (dof * BOLTZ);
 }
 
 void RigidBodyIntegrator::initialize(ContextImpl& contextRef) {

@@ -107,6 +107,9 @@ static PyObject* intListToPython(const std::vector<int>& values) {
 /* OpenMM's own Python wrappers of these handle units; they reach the C++ overrides (which validate) virtually. */
 %ignore MRattlePlugin::RigidBodyIntegrator::setStepSize;
 %ignore MRattlePlugin::RigidBodyIntegrator::setConstraintTolerance;
+%feature("pythonappend") MRattlePlugin::RigidBodyIntegrator::computeSystemTemperature %{
+    val = val*unit.kelvin
+%}
 %include "RigidBodyIntegrator.h"
 
 /*

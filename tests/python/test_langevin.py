@@ -64,3 +64,16 @@ def test_simulation_at_constant_temperature_and_pressure(platform, tmp_path):
         assert np.array_equal(uninterrupted, continued)
     else:  # the CPU neighbour list: round-off (README)
         assert np.abs(uninterrupted - continued).max() < 1e-4
+
+
+def test_compute_system_temperature_is_what_openmm8_reporters_use():
+    model = mrattle.models.benzeneCluster()
+    integrator = mrattle.MRattleLangevinIntegrator(300*unit.kelvin, 1/unit.picosecond, 2*unit.femtoseconds)
+    context = openmm.Context(model.system, integrator, openmm.Platform.getPlatformByName('Reference'))
+    context.setPositions(model.positions)
+    context.setVelocitiesToTemperature(250*unit.kelvin, 1)
+    temperature = integrator.computeSystemTemperature()
+    assert unit.is_quantity(temperature)
+    assert temperature.value_in_unit(unit.kelvin) == pytest.approx(mrattle.kineticTemperature(context).value_in_unit(unit.kelvin))
+    # 27 rigid benzenes: 162 degrees of freedom, where OpenMM's count would be 3 per atom.
+    assert integrator.getNumDegreesOfFreedom() == 162
