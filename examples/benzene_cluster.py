@@ -91,7 +91,7 @@ def main():
     model = mrattle.models.benzeneCluster(temperature=arguments.temperature*unit.kelvin, seed=arguments.seed)
     system = model.system
     if not arguments.keep_intra_body:
-        system = mrattle.removeIntraBodyInteractions(system, model.positions)
+        system = mrattle.removeIntraBodyInteractions(system, model.positions, 'molecules')
 
     integratorClass = mrattle.MRattleIntegrator if arguments.integrator == 'mrattle' else mrattle.RigidSplittingIntegrator
     integrator = integratorClass(arguments.step_size*unit.femtoseconds)

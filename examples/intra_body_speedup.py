@@ -56,7 +56,7 @@ cases = [('27-benzene cluster (324 atoms, no cutoff)', mrattle.models.benzeneClu
                                        cutoff=arguments.liquid_cutoff*unit.nanometers))]
 print('%-42s %-9s %12s %12s %8s' % ('system', 'platform', 'full ms/step', 'stripped', 'speedup'))
 for name, model in cases:
-    stripped = mrattle.removeIntraBodyInteractions(model.system, model.positions)
+    stripped = mrattle.removeIntraBodyInteractions(model.system, model.positions, 'molecules')
     for platformName in ('Reference', 'CPU'):
         contexts = [makeContext(system, model, platformName) for system in (model.system, stripped)]
         full, reduced = timeSteps(contexts)

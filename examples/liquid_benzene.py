@@ -31,7 +31,7 @@ os.makedirs(arguments.output, exist_ok=True)
 temperature = arguments.temperature*unit.kelvin
 model = mrattle.models.benzeneLiquid(numMolecules=arguments.molecules, cutoff=arguments.cutoff*unit.nanometers)
 # Bonds, angles, torsions and pairs inside a molecule cannot move a rigid molecule: drop them.
-system = mrattle.removeIntraBodyInteractions(model.system, model.positions)
+system = mrattle.removeIntraBodyInteractions(model.system, model.positions, 'molecules')
 system.addForce(openmm.AndersenThermostat(temperature, 5/unit.picosecond))
 system.addForce(openmm.MonteCarloBarostat(arguments.pressure*unit.bar, temperature, 25))
 integrator = mrattle.MRattleIntegrator(arguments.step_size*unit.femtoseconds)

@@ -211,7 +211,6 @@ TEST(Reliability, ACheckpointWithADamagedIntegratorNameIsRefusedWithAReadableMes
     }
 }
 
-INSTANTIATE_TEST_SUITE_P(AllConfigs, Reliability, ::testing::ValuesIn(allConfigs()), configName);
 
 TEST(Reliability, DamageAnywhereInTheIntegratorsCheckpointDataIsRefused) {
     // Every byte of the integrator's part (header, kernel state, checksum) flipped in turn:
@@ -240,3 +239,31 @@ TEST(Reliability, DamageAnywhereInTheIntegratorsCheckpointDataIsRefused) {
     context.loadCheckpoint(whole);
     integrator.step(1);
 }
+
+TEST_P(Reliability, ABodySpanningMoleculesIsRefusedWithABarostat) {
+    // Two waters declared one body: fine without a barostat, refused with one (it would
+    // scale the molecules apart inside the body).
+    for (bool barostat : {false, true}) {
+        Cluster c = buildCluster(water(), 2, 0.5, 3, [] {
+            ClusterOptions options;
+            options.method = NonbondedForce::PME;
+            options.cutoff = 0.45;
+            return options;
+        }());
+        if (barostat)
+            c.system->addForce(new MonteCarloBarostat(1.0, 300.0, 1));
+        std::unique_ptr<RigidBodyIntegrator> integrator = makeIntegrator(0.002);
+        vector<int> joined = c.molecules[0];
+        joined.insert(joined.end(), c.molecules[1].begin(), c.molecules[1].end());
+        integrator->addRigidBody(joined);
+        string message = barostat ? messageOf([&] { makeContext(*c.system, *integrator); }) : "";
+        if (barostat) {
+            EXPECT_NE(string::npos, message.find("two different molecules")) << message;
+            EXPECT_NE(string::npos, message.find("MonteCarloBarostat")) << message;
+        }
+        else
+            EXPECT_NO_THROW(makeContext(*c.system, *integrator));
+    }
+}
+
+INSTANTIATE_TEST_SUITE_P(AllConfigs, Reliability, ::testing::ValuesIn(allConfigs()), configName);

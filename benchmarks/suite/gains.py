@@ -89,7 +89,7 @@ def compare(num_molecules, rigid_steps_fs, nve_ps, equilibrate_ps, log):
     rows.append(dict(model="flexible all-atom, H-bond constraints", integrator="VerletIntegrator", step_fs=2.0,
                      dof=dof_flexible, **r))
     log("  flexible 2 fs: %.2f ns/day, drift %+.3g kJ/mol/ns %s" % (r["ns_per_day"], r["drift_per_ns"], r["failure"] or ""))
-    rigid = mrattle.removeIntraBodyInteractions(model.system, model.positions)
+    rigid = mrattle.removeIntraBodyInteractions(model.system, model.positions, 'molecules')
     for h in rigid_steps_fs:
         integrator = mrattle.MRattleIntegrator(h * unit.femtosecond)
         r = nve(rigid, state, integrator, nve_ps)

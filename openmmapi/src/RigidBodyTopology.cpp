@@ -1,5 +1,8 @@
 #include "RigidBodyTopology.h"
 #include "openmm/CMMotionRemover.h"
+#include "openmm/MonteCarloAnisotropicBarostat.h"
+#include "openmm/MonteCarloBarostat.h"
+#include "openmm/MonteCarloMembraneBarostat.h"
 #include "openmm/OpenMMException.h"
 #include <algorithm>
 #include <set>
@@ -118,6 +121,32 @@ RigidBodyTopology::RigidBodyTopology(const System& system, const vector<vector<i
     for (int f = 0; f < system.getNumForces(); f++)
         if (dynamic_cast<const CMMotionRemover*>(&system.getForce(f)) != nullptr)
             hasCMMotionRemover = true;
+
+    // OpenMM's barostats scale each molecule's centre: a body spanning molecules would be
+    // torn apart at every accepted move.
+    const char* barostat = nullptr;
+    for (int f = 0; f < system.getNumForces(); f++) {
+        const Force* force = &system.getForce(f);
+        if (dynamic_cast<const MonteCarloBarostat*>(force))
+            barostat = "MonteCarloBarostat";
+        else if (dynamic_cast<const MonteCarloAnisotropicBarostat*>(force))
+            barostat = "MonteCarloAnisotropicBarostat";
+        else if (dynamic_cast<const MonteCarloMembraneBarostat*>(force))
+            barostat = "MonteCarloMembraneBarostat";
+    }
+    if (barostat != nullptr) {
+        vector<int> moleculeOf(numParticles, -1);
+        for (int m = 0; m < (int) molecules.size(); m++)
+            for (int i : molecules[m])
+                moleculeOf[i] = m;
+        for (int b = 0; b < (int) bodies.size(); b++)
+            for (int i : bodies[b])
+                if (moleculeOf[i] != moleculeOf[bodies[b][0]])
+                    fail(describeBody(definitionIndex[b]) + " holds particles " + std::to_string(bodies[b][0]) + " and " +
+                         std::to_string(i) + " of two different molecules, and the System's " + barostat +
+                         " scales molecules apart, which would deform the body: make each body one molecule, or join "
+                         "its parts with a bond or constraint so that OpenMM sees one molecule");
+    }
 
     // FNV-1a hash of, for each particle, the smallest index in its body, or -1.
     vector<int32_t> representative(numParticles, -1);

@@ -40,7 +40,7 @@ def _checkFinitePositions(system, positions):
                                          % (i, tuple(position)))
 
 
-def removeIntraBodyInteractions(system, positions, bodies=None):
+def removeIntraBodyInteractions(system, positions, bodies):
     """A copy of a System without the interactions inside rigid bodies.
 
     Forces between particles of one rigid body have zero net force and zero net torque on
@@ -76,9 +76,12 @@ def removeIntraBodyInteractions(system, positions, bodies=None):
         not modified
     positions : list of Vec3 or Quantity
         positions of the rigid geometry (for the constraint lengths)
-    bodies : list of lists of int, a RigidBodyIntegrator bound to a Context, or None
-        the rigid bodies; None means the molecules of the System with two or more massive
-        particles, which are the bodies an integrator with no addRigidBody() call uses
+    bodies : list of lists of int, a RigidBodyIntegrator, or 'molecules'
+        the rigid bodies: the integrator that will run the System (its bodies in effect if
+        it is bound to a Context, else its declared bodies, else the molecules it will make
+        rigid), a list of bodies, or 'molecules' for every molecule of the System with two or
+        more massive particles. Required: a default could remove the bonded terms of
+        particles that the integrator leaves free.
 
     Returns
     -------
@@ -158,9 +161,21 @@ def _joinBodiesByConstraints(system, bodies, positions):
 
 
 def _resolveBodies(system, bodies):
+    if bodies is None:
+        raise TypeError("removeIntraBodyInteractions: pass the bodies: the integrator that will run the System, "
+                        "a list of bodies, or 'molecules' for every molecule")
     if isinstance(bodies, RigidBodyIntegrator):
-        return bodies.getBodiesInEffect()
-    if bodies is not None:
+        try:
+            return bodies.getBodiesInEffect()
+        except openmm.OpenMMException:  # not bound to a Context: what it will use
+            if bodies.getNumRigidBodies() > 0:
+                return [bodies.getRigidBodyParticles(b) for b in range(bodies.getNumRigidBodies())]
+            bodies = 'molecules'
+    if isinstance(bodies, str):
+        if bodies != 'molecules':
+            raise ValueError("removeIntraBodyInteractions: bodies must be a list, an integrator or 'molecules', got %r"
+                             % bodies)
+    else:
         return [list(body) for body in bodies]
     # OpenMM's molecules (bonds and constraints), from a throwaway Context.
     context = openmm.Context(system, openmm.VerletIntegrator(0.001), openmm.Platform.getPlatformByName('Reference'))

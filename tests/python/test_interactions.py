@@ -23,7 +23,7 @@ def run(system, model, platform, steps):
 
 def test_cluster_terms_removed_and_molecules_kept():
     model = mrattle.models.benzeneCluster()
-    stripped = mrattle.removeIntraBodyInteractions(model.system, model.positions)
+    stripped = mrattle.removeIntraBodyInteractions(model.system, model.positions, 'molecules')
     before, after = forcesByType(model.system), forcesByType(stripped)
     assert set(before) == {'HarmonicBondForce', 'HarmonicAngleForce', 'PeriodicTorsionForce', 'NonbondedForce',
                            'CustomNonbondedForce'}
@@ -46,7 +46,7 @@ def test_cluster_terms_removed_and_molecules_kept():
 
 def test_trajectory_unchanged(platform):
     model = mrattle.models.benzeneCluster(temperature=300*unit.kelvin)
-    stripped = mrattle.removeIntraBodyInteractions(model.system, model.positions)
+    stripped = mrattle.removeIntraBodyInteractions(model.system, model.positions, 'molecules')
     fullBodies, full = run(model.system, model, platform, 100)
     strippedBodies, reduced = run(stripped, model, platform, 100)
     assert strippedBodies == fullBodies == 27
@@ -64,7 +64,7 @@ def test_trajectory_unchanged(platform):
 
 def test_water_keeps_constraints_and_explicit_bodies():
     model = mrattle.models.waterBox(numMolecules=27, cutoff=0.45*unit.nanometers)
-    stripped = mrattle.removeIntraBodyInteractions(model.system, model.positions)
+    stripped = mrattle.removeIntraBodyInteractions(model.system, model.positions, 'molecules')
     assert stripped.getNumConstraints() == model.system.getNumConstraints()
     assert forcesByType(stripped)['NonbondedForce'].getNumExceptions() == 81
     # Explicit bodies: only the first two molecules.
@@ -118,7 +118,7 @@ def test_virtual_sites_count_as_part_of_their_body():
     system = app.ForceField('tip4pew.xml').createSystem(pdb.topology, nonbondedMethod=app.PME,
                                                         nonbondedCutoff=0.9*unit.nanometers, rigidWater=True)
     assert sum(system.isVirtualSite(i) for i in range(system.getNumParticles())) == 895
-    stripped = mrattle.removeIntraBodyInteractions(system, pdb.positions)
+    stripped = mrattle.removeIntraBodyInteractions(system, pdb.positions, 'molecules')
     nonbonded = forcesByType(stripped)['NonbondedForce']
     assert nonbonded.getNumExceptions() == 895*6  # O-H, O-H, H-H, and M with each: nothing new
     assert stripped.getNumConstraints() == system.getNumConstraints()
@@ -144,6 +144,23 @@ def test_positions_that_are_not_finite_are_refused():
     positions = [openmm.Vec3(*p) for p in model.positions.value_in_unit(unit.nanometers)]
     positions[3] = openmm.Vec3(float('nan'), 0, 0)
     with pytest.raises(openmm.OpenMMException, match='position of particle 3 is not finite'):
-        mrattle.removeIntraBodyInteractions(model.system, positions)
+        mrattle.removeIntraBodyInteractions(model.system, positions, 'molecules')
     with pytest.raises(openmm.OpenMMException, match='positions for a System'):
-        mrattle.removeIntraBodyInteractions(model.system, positions[:5])
+        mrattle.removeIntraBodyInteractions(model.system, positions[:5], 'molecules')
+
+
+def test_bodies_must_be_given():
+    """No default: a waters-only integrator must not lose the protein's bonded terms (issue 12)."""
+    model = mrattle.models.benzeneCluster()
+    with pytest.raises(TypeError):
+        mrattle.removeIntraBodyInteractions(model.system, model.positions)
+    with pytest.raises(TypeError, match='pass the bodies'):
+        mrattle.removeIntraBodyInteractions(model.system, model.positions, None)
+    with pytest.raises(ValueError, match="'molecules'"):
+        mrattle.removeIntraBodyInteractions(model.system, model.positions, 'waters')
+    # An integrator not yet bound: its declared bodies, or the molecules it would make rigid.
+    declared = mrattle.MRattleIntegrator(0.002)
+    declared.addRigidBody(list(range(12)))
+    partial = mrattle.removeIntraBodyInteractions(model.system, model.positions, declared)
+    everything = mrattle.removeIntraBodyInteractions(model.system, model.positions, mrattle.MRattleIntegrator(0.002))
+    assert partial.getNumConstraints() < everything.getNumConstraints()
