@@ -57,6 +57,7 @@ OPENCL_PLUGIN_PATH = (_loadKernelPlugin(_plugin_location.OPENCL_PLUGIN_PATH, req
 
 from .reporters import ProgressReporter, StateDataReporter, degreesOfFreedom, kineticTemperature
 from .interactions import removeIntraBodyInteractions
+from .topology import rigidBodies, declareRigidBodies
 from . import models
 from .serialization import asPluginIntegrator, installXmlSerializerHooks as _installXmlSerializerHooks
 
@@ -64,5 +65,5 @@ _installXmlSerializerHooks()
 
 
 __all__ = ['RigidBodyIntegrator', 'MRattleIntegrator', 'MRattleLangevinIntegrator', 'RigidSplittingIntegrator', 'StateDataReporter', 'ProgressReporter', 'degreesOfFreedom',
-           'kineticTemperature', 'removeIntraBodyInteractions', 'asPluginIntegrator', 'models', 'PLUGIN_PATH',
+           'kineticTemperature', 'removeIntraBodyInteractions', 'rigidBodies', 'declareRigidBodies', 'asPluginIntegrator', 'models', 'PLUGIN_PATH',
            'OPENCL_PLUGIN_PATH']

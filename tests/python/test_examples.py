@@ -73,3 +73,10 @@ def test_langevin_water(tmp_path):
     assert all(0.8 < float(row[4]) < 1.2 for row in rows[1:])  # density, g/mL
     assert os.path.getsize(str(out/'langevin_water.png')) > 1000
     assert '100%' in result.stderr and 'temperature' in result.stdout
+
+
+def test_solvated_protein(tmp_path):
+    result = runExample('solvated_protein.py', tmp_path, '--steps', '20', output=False)
+    assert '2761 rigid waters' in result.stdout
+    line = [l for l in result.stdout.splitlines() if l.startswith('temperature')][0]
+    assert float(line.split('constraint error')[1].split()[0]) < 1e-5

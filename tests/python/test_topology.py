@@ -1,0 +1,76 @@
+"""Rigid bodies chosen from a Topology, on OpenMM's own inputs: rigid water with a flexible
+protein (test.pdb), TIP4P-Ew with its virtual sites (tip4pew.pdb)."""
+import os
+
+import numpy as np
+import openmm
+import pytest
+from openmm import app, unit
+
+import mrattle
+
+DATA = os.path.join(os.path.dirname(app.__file__), 'data')
+
+
+def test_waters_rigid_protein_flexible_with_hbond_constraints():
+    pdb = app.PDBFile(os.path.join(DATA, 'test.pdb'))
+    forceField = app.ForceField('amber14-all.xml', 'amber14/tip3p.xml')
+    system = forceField.createSystem(pdb.topology, nonbondedMethod=app.PME, nonbondedCutoff=0.9*unit.nanometers,
+                                     constraints=app.HBonds, rigidWater=True)
+    integrator = mrattle.MRattleIntegrator(1*unit.femtoseconds)
+    assert mrattle.declareRigidBodies(integrator, pdb.topology, system, 'water') == 2761
+    context = openmm.Context(system, integrator, openmm.Platform.getPlatformByName('CPU'))
+    context.setPositions(pdb.positions)
+    context.applyConstraints(1e-10)
+    context.setPositions(context.getState(getPositions=True).getPositions())
+    context.setVelocitiesToTemperature(300*unit.kelvin, 1)
+    protein = [atom.index for atom in pdb.topology.atoms() if atom.residue.name != 'HOH']
+    assert sorted(integrator.getFreeParticles()) == protein
+    free = set(protein)
+    hbonds = [i for i in range(system.getNumConstraints()) if system.getConstraintParameters(i)[0] in free]
+    assert len(hbonds) > 100
+    # Rigid bodies 6 DOF each (CMMotionRemover: -3), protein 3 per atom less its constraints.
+    assert integrator.getNumDegreesOfFreedom() == 6*2761 + 3*len(protein) - len(hbonds) - 3
+    integrator.step(50)
+    x = context.getState(getPositions=True).getPositions(asNumpy=True).value_in_unit(unit.nanometers)
+    for i in hbonds:
+        p1, p2, distance = system.getConstraintParameters(i)
+        assert abs(np.linalg.norm(x[p1] - x[p2]) - distance.value_in_unit(unit.nanometers)) < 2e-6
+    for body in integrator.getBodiesInEffect()[:200]:
+        assert abs(np.linalg.norm(x[body[0]] - x[body[1]]) - 0.09572) < 1e-8
+
+
+def test_tip4pew_virtual_sites_are_left_out_and_follow():
+    pdb = app.PDBFile(os.path.join(DATA, 'tip4pew.pdb'))
+    forceField = app.ForceField('amber14/tip4pew.xml')
+    system = forceField.createSystem(pdb.topology, nonbondedMethod=app.PME, nonbondedCutoff=0.9*unit.nanometers,
+                                     rigidWater=True)
+    bodies = mrattle.rigidBodies(pdb.topology, system, 'water')
+    assert all(len(body) == 3 for body in bodies)
+    assert not any(system.isVirtualSite(i) for body in bodies for i in body)
+    integrator = mrattle.MRattleIntegrator(2*unit.femtoseconds)
+    for body in bodies:
+        integrator.addRigidBody(body)
+    context = openmm.Context(system, integrator, openmm.Platform.getPlatformByName('CPU'))
+    context.setPositions(pdb.positions)
+    context.setVelocitiesToTemperature(300*unit.kelvin, 2)
+    integrator.step(20)
+    x = context.getState(getPositions=True).getPositions(asNumpy=True).value_in_unit(unit.nanometers)
+    for i in range(system.getNumParticles()):
+        if system.isVirtualSite(i):
+            site = system.getVirtualSite(i)
+            expected = sum(site.getWeight(k)*x[site.getParticle(k)] for k in range(site.getNumParticles()))
+            assert np.linalg.norm(x[i] - expected) < 1e-10
+
+
+def test_selections_and_errors():
+    pdb = app.PDBFile(os.path.join(DATA, 'test.pdb'))
+    system = app.ForceField('amber14-all.xml', 'amber14/tip3p.xml').createSystem(pdb.topology, constraints=app.HBonds)
+    assert len(mrattle.rigidBodies(pdb.topology, system, ['HOH'])) == 2761
+    assert len(mrattle.rigidBodies(pdb.topology, system, lambda residue: residue.name == 'PHE')) == 4  # villin's four Phe
+    with pytest.raises(ValueError, match='no residue'):
+        mrattle.rigidBodies(pdb.topology, system, 'XYZ')
+    small = openmm.System()
+    small.addParticle(1.0)
+    with pytest.raises(ValueError, match='atoms and the System'):
+        mrattle.rigidBodies(pdb.topology, small)
