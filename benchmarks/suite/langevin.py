@@ -23,6 +23,16 @@ def block_mean(values, blocks=10):
     return means.mean(), means.std(ddof=1) / math.sqrt(blocks)
 
 
+def verdict(value, error, target, tolerance):
+    """Whether value is within tolerance (relative) of target, as far as its error bar tells."""
+    deviation, allowed = abs(value - target), tolerance * target
+    if deviation <= allowed:
+        return 'yes' if 3 * error <= allowed else 'yes (error bar larger than the tolerance)'
+    if deviation - 3 * error <= allowed:
+        return 'not resolved (%.1f SE from the target)' % (deviation / error)
+    return 'no (%.1f SE outside the tolerance)' % ((deviation - allowed) / error)
+
+
 def water_system(barostat=False):
     pdb = app.PDBFile(os.path.join(os.path.dirname(app.__file__), 'data', 'tip3p.pdb'))
     forcefield = app.ForceField('amber14/tip3p.xml')
@@ -182,12 +192,8 @@ def run(quick, out, log):
     m, s = results[('M-RATTLE Langevin', 'NVT')], results[('LangevinMiddle + SETTLE', 'NVT')]
     for key, name, tolerance in (('T', 'kinetic temperature (K)', 0.01), ('Ttrans', 'translational temperature (K)', 0.02),
                                  ('Trot', 'rotational temperature (K)', 0.02)):
-        within = abs(m[key][0] - 300) <= tolerance * 300
-        resolved = 3 * m[key][1] < tolerance * 300
-        verdict = ('within %d%% of 300 K' % round(100 * tolerance) if within else 'NOT within %d%%' % round(100 * tolerance))
-        if not resolved:
-            verdict += ' (error bar too large to resolve)'
-        report.append('| %s | %s | %s | 300 +- %d%% | %s |' % (name, fmt(m[key]), fmt(s[key]), round(100 * tolerance), verdict))
+        report.append('| %s | %s | %s | 300 +- %d%% | %s |' % (name, fmt(m[key]), fmt(s[key]), round(100 * tolerance),
+                                                             verdict(m[key][0], m[key][1], 300, tolerance)))
         rows.append(dict(quantity=key, mrattle=m[key][0], mrattle_error=m[key][1], settle=s[key][0], settle_error=s[key][1]))
     difference = m['U'][0] - s['U'][0]
     combined = math.hypot(m['U'][1], s['U'][1])
@@ -196,8 +202,9 @@ def run(quick, out, log):
             difference, abs(difference) / combined, 'consistent' if abs(difference) <= 3 * combined else 'NOT consistent')))
     rows.append(dict(quantity='U', mrattle=m['U'][0], mrattle_error=m['U'][1], settle=s['U'][0], settle_error=s['U'][1]))
     peak_m, peak_s = m['peak'], s['peak']
-    report.append('| O-O g(r) first peak: height (position, nm) | %.3f (%.4f) | %.3f (%.4f) | heights within 3%% | %s |' % (
-        peak_m[0], peak_m[1], peak_s[0], peak_s[1], 'differ by %.1f%%' % (100 * abs(peak_m[0] / peak_s[0] - 1))))
+    report.append('| O-O g(r) first peak: height (position, nm) | %.3f (%.4f) | %.3f (%.4f) | heights within 3%% | '
+                  'differ by %.1f%% (no error bar: one histogram per run) |' % (
+                      peak_m[0], peak_m[1], peak_s[0], peak_s[1], 100 * abs(peak_m[0] / peak_s[0] - 1)))
     rows.append(dict(quantity='gOO_peak', mrattle=peak_m[0], mrattle_error='', settle=peak_s[0], settle_error=''))
     dm, ds = results[('M-RATTLE Langevin', 'NPT')]['density'], results[('LangevinMiddle + SETTLE', 'NPT')]['density']
     report.append('| density at 1 bar (g/mL) | %s | %s | within 0.005 g/mL | difference %.4f +- %.4f |' % (
@@ -205,20 +212,22 @@ def run(quick, out, log):
     rows.append(dict(quantity='density', mrattle=dm[0], mrattle_error=dm[1], settle=ds[0], settle_error=ds[1]))
 
     report.append('\n### Rigid liquid benzene (64 molecules, PME) at 298 K\n')
-    report.append('| Step (fs) | translational T (K) | rotational T (K) | within 2% of 298 K |')
-    report.append('|---|---|---|---|')
+    report.append('| Step (fs) | translational T (K) | rotational T (K) | translational within 2% | rotational within 2% |')
+    report.append('|---|---|---|---|---|')
     largest_stable = None
     for step in (2, 4, 8, 12, 16):
         result = benzene_temperatures(step, int(500 * (0.04 if quick else 1)), log, 0.2 if quick else 20.0)
         if result is None:
-            report.append('| %d | unstable | unstable | no |' % step)
+            report.append('| %d | unstable | unstable | no | no |' % step)
             continue
         largest_stable = step
         (tt, te), (tr, re) = result
-        ok = abs(tt - 298) <= 0.02 * 298 and abs(tr - 298) <= 0.02 * 298
-        report.append('| %d | %.1f +- %.1f | %.1f +- %.1f | %s |' % (step, tt, te, tr, re, 'yes' if ok else 'no'))
+        report.append('| %d | %.1f +- %.1f | %.1f +- %.1f | %s | %s |' % (
+            step, tt, te, tr, re, verdict(tt, te, 298, 0.02), verdict(tr, re, 298, 0.02)))
         rows.append(dict(quantity='benzene_%dfs' % step, mrattle=tt, mrattle_error=te, settle=tr, settle_error=re))
-    report.append('\nLargest step tried that stayed stable for the run: %s fs.' % largest_stable)
+    report.append('\nLargest step tried that stayed stable for the run: %s fs (the largest tried). Benzene\'s block '
+                  'errors (10 ps of production) are about as large as the 2%% tolerance: longer runs are needed to '
+                  'resolve it at the larger steps.' % largest_stable)
     os.makedirs(os.path.dirname(os.path.abspath(out)), exist_ok=True)
     with open(out + '.csv', 'w', newline='') as stream:
         writer = csv.DictWriter(stream, fieldnames=['quantity', 'mrattle', 'mrattle_error', 'settle', 'settle_error'])
