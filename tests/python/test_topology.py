@@ -74,3 +74,43 @@ def test_selections_and_errors():
     small.addParticle(1.0)
     with pytest.raises(ValueError, match='atoms and the System'):
         mrattle.rigidBodies(pdb.topology, small)
+
+
+def platformNames():
+    names = ['Reference', 'CPU']
+    if mrattle.OPENCL_PLUGIN_PATH is not None:
+        names.append('OpenCL')
+    return names
+
+
+@pytest.mark.parametrize('platformName', platformNames())
+@pytest.mark.parametrize('pdbName,forceFieldName', [('tip3p.pdb', 'amber14/tip3p.xml'), ('tip4pew.pdb', 'amber14/tip4pew.xml'),
+                                                     ('tip5p.pdb', 'tip5p.xml'), ('spce.pdb', 'amber14/spce.xml')])
+def test_waters_take_their_force_field_geometry(platformName, pdbName, forceFieldName):
+    """The PDB files' waters are off their model's geometry by ~1e-3: a fully constrained
+    body takes its constraint geometry when positions are set (OpenMM's SETTLE, good to
+    ~3e-8 in 7.7) and keeps it while stepping."""
+    pdb = app.PDBFile(os.path.join(DATA, pdbName))
+    system = app.ForceField(forceFieldName).createSystem(pdb.topology, nonbondedMethod=app.PME,
+                                                         nonbondedCutoff=0.7*unit.nanometers, rigidWater=True)
+    integrator = mrattle.MRattleIntegrator(2*unit.femtoseconds)
+    properties = {'Precision': 'double'} if platformName == 'OpenCL' else {}
+    context = openmm.Context(system, integrator, openmm.Platform.getPlatformByName(platformName), properties)
+    context.setPositions(pdb.positions)
+    context.setVelocitiesToTemperature(300*unit.kelvin, 1)
+
+    def worst(x):
+        return max(abs(np.linalg.norm(x[p1] - x[p2]) - d.value_in_unit(unit.nanometers))/d.value_in_unit(unit.nanometers)
+                   for p1, p2, d in (system.getConstraintParameters(i) for i in range(system.getNumConstraints())))
+    assert worst(pdb.getPositions(asNumpy=True).value_in_unit(unit.nanometers)) > 1e-4  # the file's waters are off
+    x = context.getState(getPositions=True).getPositions(asNumpy=True).value_in_unit(unit.nanometers)
+    assert worst(x) < 1e-7
+    integrator.step(5)
+    y = context.getState(getPositions=True).getPositions(asNumpy=True).value_in_unit(unit.nanometers)
+    assert worst(y) < 1e-7
+    for i in range(system.getNumParticles()):  # virtual sites (TIP4P/TIP5P) follow the corrected bodies
+        if system.isVirtualSite(i):
+            site = system.getVirtualSite(i)
+            if isinstance(site, openmm.ThreeParticleAverageSite):
+                expected = sum(site.getWeight(k)*y[site.getParticle(k)] for k in range(3))
+                assert np.linalg.norm(y[i] - expected) < 1e-9

@@ -1,11 +1,13 @@
 #ifndef MRATTLE_COMMON_KERNELS_H_
 #define MRATTLE_COMMON_KERNELS_H_
 
+#include "BodyShapeConstraints.h"
 #include "internal/RigidBodyKernels.h"
 #include "mrattle/RigidBodyMath.h"
 #include "openmm/common/ComputeArray.h"
 #include "openmm/common/ComputeContext.h"
 #include "openmm/common/ComputeKernel.h"
+#include <memory>
 #include <vector>
 
 namespace MRattlePlugin {
@@ -65,6 +67,7 @@ private:
     OpenMM::ComputeKernel kickAndDrift, resetBodies, constrainFreePositions, applyPositionStep, kickVelocities,
         projectBodies, constrainFreeVelocities, langevinNoise, backupState;
     bool langevin = false;
+    std::unique_ptr<BodyShapeConstraints> shapeConstraints;
 };
 
 } // namespace MRattlePlugin

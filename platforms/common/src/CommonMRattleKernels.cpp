@@ -87,6 +87,7 @@ void CommonIntegrateMRattleStepKernel::initialize(const System& system, const Ri
     langevin = (langevinIntegrator != nullptr);
     topology = bodies;
     numBodies = topology.getNumBodies();
+    shapeConstraints.reset(new BodyShapeConstraints(system, topology));
     shapes.assign(numBodies, RigidBodyMath::Shape::General);
     vector<int> starts = {0};
     for (int b = 0; b < numBodies; b++) {
@@ -440,6 +441,12 @@ void CommonIntegrateMRattleStepKernel::updateShapes(ContextImpl& context) {
     vector<Vec3> positions;
     context.getPositions(positions);
     requireFinite(positions, "position");
+    if (shapeConstraints->apply(positions)) {
+        // Back to the device (this notifies the integrator again, which then finds every
+        // body on its geometry).
+        context.setPositions(positions);
+        return;
+    }
     const double* x = reinterpret_cast<const double*>(positions.data());
     vector<int> flags(std::max(1, numBodies), 0);
     for (int b = 0; b < numBodies; b++) {

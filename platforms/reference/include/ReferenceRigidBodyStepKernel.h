@@ -1,6 +1,7 @@
 #ifndef MRATTLE_REFERENCE_RIGID_BODY_STEP_KERNEL_H_
 #define MRATTLE_REFERENCE_RIGID_BODY_STEP_KERNEL_H_
 
+#include "BodyShapeConstraints.h"
 #include "ReferenceRigidBodyDynamics.h"
 #include "RigidBodyIntegrator.h"
 #include "openmm/OpenMMException.h"
@@ -26,6 +27,7 @@ public:
     void initialize(const OpenMM::System& system, const RigidBodyTopology& topology,
                     const RigidBodyIntegrator& integrator) override {
         dynamics.reset(new ReferenceRigidBodyDynamics(system, topology));
+        shapes.reset(new BodyShapeConstraints(system, topology));
         newPositions.resize(system.getNumParticles());
         newVelocities.resize(system.getNumParticles());
         kicked.resize(system.getNumParticles());
@@ -43,8 +45,11 @@ public:
         forcesAreValid = true;
     }
     void updateShapes(OpenMM::ContextImpl& context) override {
-        requireFinite(ReferenceRigidBodyDynamics::positions(context), "position");
-        dynamics->updateShapes(ReferenceRigidBodyDynamics::positions(context));
+        std::vector<OpenMM::Vec3>& positions = ReferenceRigidBodyDynamics::positions(context);
+        requireFinite(positions, "position");
+        if (shapes->apply(positions))
+            context.computeVirtualSites();
+        dynamics->updateShapes(positions);
     }
     void projectVelocities(OpenMM::ContextImpl& context, double tolerance) override {
         std::vector<OpenMM::Vec3>& velocities = ReferenceRigidBodyDynamics::velocities(context);
@@ -95,6 +100,7 @@ protected:
     virtual void integratePositions(OpenMM::ContextImpl& context, const RigidBodyIntegrator& integrator) = 0;
 
     std::unique_ptr<ReferenceRigidBodyDynamics> dynamics;
+    std::unique_ptr<BodyShapeConstraints> shapes;
     std::vector<OpenMM::Vec3> newPositions, newVelocities, kicked;  // step buffers
 };
 

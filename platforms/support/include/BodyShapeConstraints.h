@@ -1,0 +1,43 @@
+#ifndef MRATTLE_BODY_SHAPE_CONSTRAINTS_H_
+#define MRATTLE_BODY_SHAPE_CONSTRAINTS_H_
+
+#include "RigidBodyTopology.h"
+#include "openmm/System.h"
+#include "openmm/Vec3.h"
+#include "openmm/reference/ReferenceConstraints.h"
+#include <memory>
+#include <vector>
+
+namespace MRattlePlugin {
+
+/**
+ * Bodies whose internal constraints determine their shape (at least 3k - 6 of them for
+ * k >= 3 atoms, one for two; rigid water, any fully constrained molecule) take their
+ * constraint geometry when positions are set, as OpenMM's own integrators converge to it.
+ * Only bodies off that geometry by more than Tolerance are moved (by OpenMM's own
+ * constraint code: SETTLE for water, CCMA otherwise): bodies already on it keep their exact
+ * rigid shape. A body whose constraints do not converge (singular, e.g. planar) keeps the
+ * shape it was given. Used by every platform's kernels on the host.
+ */
+class BodyShapeConstraints {
+public:
+    BodyShapeConstraints(const OpenMM::System& system, const RigidBodyTopology& topology);
+    /** Move the bodies that are off their constraint geometry onto it; true if any moved. */
+    bool apply(std::vector<OpenMM::Vec3>& positions) const;
+    /** The largest relative error of a body's shape constraints at these positions. */
+    double error(const std::vector<OpenMM::Vec3>& positions, int body) const;
+    /** Relative constraint error above which a body's shape is corrected (OpenMM 7.7's SETTLE is good to ~3e-8). */
+    static constexpr double Tolerance = 1e-6;
+
+private:
+    RigidBodyTopology topology;
+    std::vector<double> inverseMasses;
+    std::unique_ptr<OpenMM::ReferenceConstraints> constraints;
+    std::vector<std::vector<int> > constraintsOfBody;  // indices into the three arrays below
+    std::vector<int> p1, p2;
+    std::vector<double> distance;
+};
+
+} // namespace MRattlePlugin
+
+#endif

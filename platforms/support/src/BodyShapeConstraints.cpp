@@ -1,0 +1,88 @@
+#include "BodyShapeConstraints.h"
+#include <algorithm>
+#include <cmath>
+
+using namespace MRattlePlugin;
+using namespace OpenMM;
+using std::vector;
+
+BodyShapeConstraints::BodyShapeConstraints(const System& system, const RigidBodyTopology& bodies) : topology(bodies) {
+    const int n = system.getNumParticles();
+    inverseMasses.resize(n);
+    for (int i = 0; i < n; i++)
+        inverseMasses[i] = (system.getParticleMass(i) == 0 ? 0.0 : 1.0 / system.getParticleMass(i));
+    vector<vector<int> > internal(bodies.getNumBodies());
+    for (int c = 0; c < system.getNumConstraints(); c++) {
+        int a, b;
+        double d;
+        system.getConstraintParameters(c, a, b, d);
+        int body = bodies.getBodyOfParticle(a);
+        if (body != -1 && body == bodies.getBodyOfParticle(b))
+            internal[body].push_back(c);
+    }
+    constraintsOfBody.resize(bodies.getNumBodies());
+    System shapes;
+    for (int i = 0; i < n; i++)
+        shapes.addParticle(system.getParticleMass(i));
+    for (int body = 0; body < bodies.getNumBodies(); body++) {
+        const int k = bodies.getBodyParticles(body).size();
+        if ((int) internal[body].size() < (k == 2 ? 1 : 3 * k - 6))
+            continue;
+        for (int c : internal[body]) {
+            int a, b;
+            double d;
+            system.getConstraintParameters(c, a, b, d);
+            constraintsOfBody[body].push_back(distance.size());
+            p1.push_back(a);
+            p2.push_back(b);
+            distance.push_back(d);
+            shapes.addConstraint(a, b, d);
+        }
+    }
+    if (shapes.getNumConstraints() > 0)
+        constraints.reset(new ReferenceConstraints(shapes));
+}
+
+double BodyShapeConstraints::error(const vector<Vec3>& positions, int body) const {
+    double worst = 0;
+    for (int c : constraintsOfBody[body]) {
+        Vec3 d = positions[p1[c]] - positions[p2[c]];
+        const double relative = std::fabs(std::sqrt(d.dot(d)) - distance[c]) / distance[c];
+        worst = std::isfinite(relative) ? std::max(worst, relative) : INFINITY;
+    }
+    return worst;
+}
+
+bool BodyShapeConstraints::apply(vector<Vec3>& positions) const {
+    if (!constraints)
+        return false;
+    // Only bodies clearly off their geometry (a PDB file's waters are off by ~1e-3) move:
+    // re-applying OpenMM's constraint code to exact bodies (after a barostat move, say)
+    // would perturb their rigid shape at its accuracy.
+    vector<char> off(topology.getNumBodies(), 0);
+    bool anyOff = false;
+    for (int body = 0; body < topology.getNumBodies(); body++)
+        if (!constraintsOfBody[body].empty() && error(positions, body) > Tolerance)
+            anyOff = off[body] = 1;
+    if (!anyOff)
+        return false;
+    const vector<Vec3> given = positions;
+    // The same array for old and new positions, as OpenMM's applyConstraints does: SETTLE
+    // then rebuilds each water from its constraint geometry.
+    vector<double> masses = inverseMasses;
+    constraints->apply(positions, positions, masses, 1e-10);
+    bool changed = false;
+    for (int body = 0; body < topology.getNumBodies(); body++) {
+        if (constraintsOfBody[body].empty())
+            continue;
+        // OpenMM's CCMA gives up silently: a body it did not solve keeps its given shape.
+        const bool keep = !off[body] || !(error(positions, body) <= Tolerance);
+        for (int i : topology.getBodyParticles(body)) {
+            if (keep)
+                positions[i] = given[i];
+            else
+                changed = true;
+        }
+    }
+    return changed;
+}
