@@ -114,3 +114,55 @@ def test_waters_take_their_force_field_geometry(platformName, pdbName, forceFiel
             if isinstance(site, openmm.ThreeParticleAverageSite):
                 expected = sum(site.getWeight(k)*y[site.getParticle(k)] for k in range(3))
                 assert np.linalg.norm(y[i] - expected) < 1e-9
+
+
+def test_villin_with_rigid_water_conserves_energy_like_verlet_with_settle_and_ccma():
+    """OpenMM's test.pdb: rigid waters (M-RATTLE) and a flexible protein (RATTLE for its
+    H-bond constraints) against VerletIntegrator with SETTLE and CCMA, from one
+    thermalized start, NVE at 1 and 2 fs: the total-energy fluctuations agree (measured
+    ratios 0.98 and 1.05; a 1.5x band allows for one run's noise) and the protein's H-bond
+    lengths hold to the tolerance."""
+    pdb = app.PDBFile(os.path.join(DATA, 'test.pdb'))
+    forceField = app.ForceField('amber14-all.xml', 'amber14/tip3p.xml')
+    system = forceField.createSystem(pdb.topology, nonbondedMethod=app.PME, nonbondedCutoff=0.9*unit.nanometers,
+                                     constraints=app.HBonds, rigidWater=True)
+    cpu = openmm.Platform.getPlatformByName('CPU')
+    thermalize = openmm.LangevinMiddleIntegrator(300*unit.kelvin, 5/unit.picosecond, 1*unit.femtoseconds)
+    thermalize.setRandomNumberSeed(1)
+    context = openmm.Context(system, thermalize, cpu)
+    context.setPositions(pdb.positions)
+    context.setVelocitiesToTemperature(300*unit.kelvin, 1)
+    thermalize.step(300)
+    start = context.getState(getPositions=True, getVelocities=True)
+    del context
+    fluctuation = {}
+    for h in (1, 2):
+        for name in ('M-RATTLE', 'Verlet'):
+            if name == 'M-RATTLE':
+                integrator = mrattle.MRattleIntegrator(h*unit.femtoseconds)
+                mrattle.declareRigidBodies(integrator, pdb.topology, system, 'water')
+            else:
+                integrator = openmm.VerletIntegrator(h*unit.femtoseconds)
+            integrator.setConstraintTolerance(1e-6)
+            context = openmm.Context(system, integrator, cpu)
+            context.setPositions(start.getPositions())
+            context.setVelocities(start.getVelocities())
+            energies = []
+            for k in range(100//h):
+                integrator.step(2//h)
+                state = context.getState(getEnergy=True)
+                energies.append((state.getKineticEnergy() + state.getPotentialEnergy()).value_in_unit(unit.kilojoule_per_mole))
+            fluctuation[(name, h)] = np.std(energies)
+            if name == 'M-RATTLE':
+                x = context.getState(getPositions=True).getPositions(asNumpy=True).value_in_unit(unit.nanometers)
+                free = set(integrator.getFreeParticles())
+                for i in range(system.getNumConstraints()):
+                    p1, p2, distance = system.getConstraintParameters(i)
+                    if p1 in free:
+                        d = distance.value_in_unit(unit.nanometers)
+                        assert abs(np.linalg.norm(x[p1] - x[p2]) - d) < 3e-6*d
+            del context
+    for h in (1, 2):
+        ratio = fluctuation[('M-RATTLE', h)]/fluctuation[('Verlet', h)]
+        assert 1/1.5 < ratio < 1.5, (h, fluctuation)
+    assert fluctuation[('M-RATTLE', 2)] > fluctuation[('M-RATTLE', 1)]
