@@ -40,6 +40,14 @@ public:
     bool isBodyLinear(int index) const;
     /** Massive particles that belong to no body in the bound Context. */
     const std::vector<int>& getFreeParticles() const;
+    /**
+     * With no body declared every molecule is rigid, a protein too: the bodies in effect
+     * that were made rigid that way and have more than LargeBodyAtoms atoms (empty when
+     * bodies were declared). Python's mrattle warns once when it is not empty.
+     */
+    std::vector<int> getLargeDefaultBodies() const;
+    /** More atoms than this in a body nobody declared is worth a warning. */
+    static constexpr int LargeBodyAtoms = 30;
     /** Degrees of freedom of the bound Context's System under this integrator. */
     int getNumDegreesOfFreedom() const;
     /**
@@ -116,6 +124,11 @@ private:
     bool positionsNotFinite = false, velocitiesNotFinite = false;
     /** Positions were set (or loaded): rigid-body velocities are defined only relative to them. */
     bool positionsSet = false;
+    /**
+     * Between a checkpoint load that fits and its last notification: its velocities are
+     * this integrator's, rigid by construction, and are kept untouched (bit for bit).
+     */
+    bool loadingCheckpoint = false;
 };
 
 } // namespace MRattlePlugin

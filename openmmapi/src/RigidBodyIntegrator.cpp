@@ -79,6 +79,16 @@ const vector<int>& RigidBodyIntegrator::getFreeParticles() const {
     return getTopology().getFreeParticles();
 }
 
+vector<int> RigidBodyIntegrator::getLargeDefaultBodies() const {
+    vector<int> large;
+    if (!declaredBodies.empty())
+        return large;
+    for (int b = 0; b < getTopology().getNumBodies(); b++)
+        if ((int) topology.getBodyParticles(b).size() > LargeBodyAtoms)
+            large.push_back(b);
+    return large;
+}
+
 int RigidBodyIntegrator::getNumDegreesOfFreedom() const {
     return getTopology().getNumDegreesOfFreedom(kernel.getAs<const RigidBodyKernel>().getBodyDegreesOfFreedom());
 }
@@ -129,6 +139,13 @@ void RigidBodyIntegrator::stateChanged(State::DataType changed) {
     forcesAreValid = false;
     if (context == nullptr)
         return;
+    if (changed == State::Energy && loadingCheckpoint) {
+        // OpenMM's last notification of a checkpoint load: continue as the run that wrote it.
+        loadingCheckpoint = false;
+        lastStepCount = context->getStepCount();
+        velocitiesNeedProjection = false;
+        return;
+    }
     RigidBodyKernel& stepKernel = kernel.getAs<RigidBodyKernel>();
     if (changed == State::Positions) {
         try {
@@ -151,7 +168,9 @@ void RigidBodyIntegrator::stateChanged(State::DataType changed) {
     if (changed == State::Positions || changed == State::Velocities) {
         // After a refused checkpoint the velocities are that checkpoint's (on some platforms
         // garbage): they are projected once new ones are set.
-        if (isCurrentIntegrator() && positionsSet && !refusedCheckpoint) {
+        if (loadingCheckpoint)
+            velocitiesNotFinite = false;  // a checkpoint's velocities are as they were written
+        else if (isCurrentIntegrator() && positionsSet && !refusedCheckpoint) {
             try {
                 stepKernel.projectVelocities(*context, getConstraintTolerance());
             } catch (const OpenMMException& e) {
@@ -178,6 +197,7 @@ void RigidBodyIntegrator::loadCheckpoint(std::istream& stream) {
     try {
         std::istringstream kernelState(RigidBodyCheckpointHeader::read(stream, getStepKernelName(), topology));
         kernel.getAs<RigidBodyKernel>().loadCheckpoint(*context, kernelState);
+        loadingCheckpoint = true;
     } catch (const OpenMMException& e) {
         // OpenMM has already overwritten positions, velocities, time, box and parameters.
         refusedCheckpoint = true;

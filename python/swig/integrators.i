@@ -91,6 +91,10 @@ static PyObject* intListToPython(const std::vector<int>& values) {
     $result = intListToPython(*$1);
 }
 
+%typemap(out, fragment="mrattle_intListToPython") std::vector<int> {
+    $result = intListToPython($1);
+}
+
 %typemap(out, fragment="mrattle_intListToPython") const std::vector<std::vector<int> >& {
     $result = PyList_New($1->size());
     for (size_t i = 0; i < $1->size(); i++)
@@ -99,6 +103,7 @@ static PyObject* intListToPython(const std::vector<int>& values) {
 
 /* Types as the Python docstrings name them. */
 %typemap(doctype) const std::vector<int>& "list of int"
+%typemap(doctype) std::vector<int> "list of int"
 %typemap(doctype) const std::vector<std::vector<int> >& "list of list of int"
 
 #define OPENMM_EXPORT_MRATTLE
@@ -107,6 +112,19 @@ static PyObject* intListToPython(const std::vector<int>& values) {
 /* OpenMM's own Python wrappers of these handle units; they reach the C++ overrides (which validate) virtually. */
 %ignore MRattlePlugin::RigidBodyIntegrator::setStepSize;
 %ignore MRattlePlugin::RigidBodyIntegrator::setConstraintTolerance;
+/* Every molecule rigid by default, a protein too: say so once, at the first step. */
+%feature("pythonprepend") MRattlePlugin::RigidBodyIntegrator::step %{
+    if not getattr(self, '_checkedDefaultBodies', False):
+        self._checkedDefaultBodies = True
+        large = self.getLargeDefaultBodies()
+        if large:
+            import warnings
+            sizes = [len(self.getBodiesInEffect()[b]) for b in large]
+            warnings.warn('%d molecule(s) of more than %d atoms became rigid bodies because no body was declared '
+                          '(the largest has %d atoms). Declare the bodies you want rigid, e.g. '
+                          "mrattle.declareRigidBodies(integrator, topology, system, 'water'), to keep the rest flexible."
+                          % (len(large), RigidBodyIntegrator.LargeBodyAtoms, max(sizes)), stacklevel=2)
+%}
 %feature("pythonappend") MRattlePlugin::RigidBodyIntegrator::computeSystemTemperature %{
     val = val*unit.kelvin
 %}

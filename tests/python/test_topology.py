@@ -166,3 +166,23 @@ def test_villin_with_rigid_water_conserves_energy_like_verlet_with_settle_and_cc
         ratio = fluctuation[('M-RATTLE', h)]/fluctuation[('Verlet', h)]
         assert 1/1.5 < ratio < 1.5, (h, fluctuation)
     assert fluctuation[('M-RATTLE', 2)] > fluctuation[('M-RATTLE', 1)]
+
+
+def test_a_protein_made_rigid_by_default_is_warned_about_once():
+    pdb = app.PDBFile(os.path.join(DATA, 'test.pdb'))
+    system = app.ForceField('amber14-all.xml', 'amber14/tip3p.xml').createSystem(
+        pdb.topology, nonbondedMethod=app.PME, nonbondedCutoff=0.9*unit.nanometers, constraints=app.HBonds)
+    integrator = mrattle.MRattleIntegrator(1*unit.femtoseconds)  # no body declared: every molecule rigid
+    context = openmm.Context(system, integrator, openmm.Platform.getPlatformByName('CPU'))
+    context.setPositions(pdb.positions)
+    assert len(integrator.getLargeDefaultBodies()) == 1
+    with pytest.warns(UserWarning, match=r'1 molecule\(s\) of more than 30 atoms .*the largest has 582 atoms'):
+        integrator.step(1)
+    import warnings
+    with warnings.catch_warnings():
+        warnings.simplefilter('error')
+        integrator.step(1)  # once only
+    declared = mrattle.MRattleIntegrator(1*unit.femtoseconds)
+    mrattle.declareRigidBodies(declared, pdb.topology, system, 'water')
+    openmm.Context(system, declared, openmm.Platform.getPlatformByName('Reference'))
+    assert declared.getLargeDefaultBodies() == []
