@@ -24,6 +24,58 @@ PrincipalFrame principalFrame(const Matrix3d& secondMoment) {
     return frame;
 }
 
+PrincipalFrame principalFrame(const Matrix3d& secondMoment, const RigidBodyMath::BodyView& body, const double* positions,
+                              const Vector3d& center) {
+    PrincipalFrame frame = principalFrame(secondMoment);
+    // Equal moments leave the eigensolver free to pick any basis of their plane (it follows
+    // round-off), which makes the splitting irreversible. Take the basis from the body's own
+    // atoms instead: it then turns with the body, and a step back undoes a step forward.
+    const double scale = frame.moments.cwiseAbs().maxCoeff();
+    const double degenerate = 1e-10 * scale;
+    auto atomDirection = [&](const Vector3d& normal, int skip) -> Vector3d {
+        // The first atom (in body order, after `skip` usable ones) with a component off `normal`.
+        int seen = 0;
+        for (int k = 0; k < body.numAtoms; k++) {
+            Vector3d a = point(positions, body.atoms[k]) - center;
+            if (normal.squaredNorm() > 0)
+                a -= a.dot(normal) * normal;
+            if (a.norm() > 1e-6 * std::sqrt(scale / body.totalMass) && seen++ == skip)
+                return a.normalized();
+        }
+        return Vector3d::Zero();
+    };
+    if (scale <= 0 || body.linear)
+        return frame;
+    const bool equal01 = std::fabs(frame.moments(0) - frame.moments(1)) <= degenerate;
+    const bool equal12 = std::fabs(frame.moments(1) - frame.moments(2)) <= degenerate;
+    if (equal01 && equal12) {  // a spherical top: two atoms' directions
+        Vector3d e0 = atomDirection(Vector3d::Zero(), 0);
+        Vector3d e1 = Vector3d::Zero();
+        for (int skip = 0; skip < body.numAtoms && e1.squaredNorm() == 0; skip++) {
+            Vector3d candidate = atomDirection(e0, skip);
+            if (candidate.squaredNorm() > 0)
+                e1 = candidate;
+        }
+        if (e0.squaredNorm() > 0 && e1.squaredNorm() > 0) {
+            frame.axes.col(0) = e0;
+            frame.axes.col(1) = e1;
+            frame.axes.col(2) = e0.cross(e1);
+        }
+    }
+    else if (equal01 || equal12) {  // a symmetric top: the unique axis, and an atom in the plane
+        const int unique = equal01 ? 2 : 0, first = equal01 ? 0 : 1, second = first + 1;
+        const Vector3d normal = frame.axes.col(unique);
+        Vector3d e = atomDirection(normal, 0);
+        if (e.squaredNorm() > 0) {
+            frame.axes.col(first) = e;
+            frame.axes.col(second) = normal.cross(e);
+            if (frame.axes.determinant() < 0)
+                frame.axes.col(second) = -frame.axes.col(second);
+        }
+    }
+    return frame;
+}
+
 Matrix3d axisRotation(int axis, double angle) {
     const double c = std::cos(angle), s = std::sin(angle);
     const int i = (axis + 1) % 3, j = (axis + 2) % 3;
@@ -92,7 +144,7 @@ bool positionStep(const RigidBodyMath::BodyView& body, const double* positions, 
         return true;
     }
     // Free rotor in the principal frame Q: Pi = Q^T L, Q -> Q R, so a_i -> S a_i with S = Q R Q^T.
-    const PrincipalFrame frame = principalFrame(J);
+    const PrincipalFrame frame = principalFrame(J, body, positions, center);
     Vector3d bodyMomentum = frame.axes.transpose() * angularMomentum;
     const Matrix3d rotation = freeRotorStep(frame.moments, bodyMomentum, h, body.linear);
     const Matrix3d newAxes = frame.axes * rotation;

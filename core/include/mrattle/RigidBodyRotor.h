@@ -10,7 +10,8 @@
  * The body state (centre, orientation, body-frame sites, principal moments, angular
  * momentum) is derived afresh from the atoms' positions and rigid velocities at each
  * step, so a step depends only on the Cartesian state: restarts are exact and nothing
- * but positions and velocities needs to be stored.
+ * but positions and velocities needs to be stored. For equal moments the frame is taken
+ * from the atoms (it turns with the body), which keeps the step time-reversible.
  */
 
 #include "mrattle/RigidBodyMath.h"
@@ -33,6 +34,15 @@ struct PrincipalFrame {
  * The moments are in ascending order, so a linear body's zero moment (its axis) is first.
  */
 PrincipalFrame principalFrame(const Eigen::Matrix3d& secondMoment);
+
+/**
+ * The principal frame of a body, with the basis of a degenerate plane (equal moments: a
+ * symmetric or spherical top, such as benzene) taken from the body's own atoms, so that it
+ * turns with the body and the splitting step is exactly time-reversible. Linear bodies
+ * keep principalFrame(J)'s basis.
+ */
+PrincipalFrame principalFrame(const Eigen::Matrix3d& secondMoment, const RigidBodyMath::BodyView& body,
+                              const double* positions, const Eigen::Vector3d& center);
 
 /** Rotation by angle about body axis 0, 1 or 2 (right-handed). */
 Eigen::Matrix3d axisRotation(int axis, double angle);
