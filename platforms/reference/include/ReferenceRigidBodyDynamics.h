@@ -6,7 +6,10 @@
 #include "openmm/System.h"
 #include "openmm/Vec3.h"
 #include "openmm/internal/ContextImpl.h"
+#include "openmm/internal/ThreadPool.h"
 #include "openmm/reference/ReferenceConstraints.h"
+#include <climits>
+#include <functional>
 #include <iosfwd>
 #include <memory>
 #include <random>
@@ -39,6 +42,17 @@ public:
     }
     /** The numerical core's view of one body. */
     RigidBodyMath::BodyView view(int body) const;
+    /**
+     * Use this many threads for the per-body work (the CPU platform's Threads). Each body is
+     * computed the same way whichever thread takes it, so results do not depend on it.
+     */
+    void setThreads(int numThreads);
+    /**
+     * Call work(body) for every body, on the threads when there are enough bodies to pay for
+     * them. work returns false for a body that failed; the smallest such index is returned
+     * (INT_MAX if none), so which body is reported does not depend on the threads either.
+     */
+    int forEachBody(const std::function<bool(int)>& work);
 
     /** Classify each body's shape (linear or not) from the given positions. */
     void updateShapes(const std::vector<OpenMM::Vec3>& positions);
@@ -106,6 +120,7 @@ private:
     std::vector<RigidBodyMath::Shape> shapes;
     std::unique_ptr<OpenMM::ReferenceConstraints> freeConstraints;
     bool andersen = false;
+    std::unique_ptr<OpenMM::ThreadPool> threads;
     std::mt19937_64 collisionRandom;
     bool randomIsSet = false;
 };

@@ -33,6 +33,7 @@ public:
         kicked.resize(system.getNumParticles());
     }
     void execute(OpenMM::ContextImpl& context, const RigidBodyIntegrator& integrator, bool& forcesAreValid) override {
+        useThreadsOf(context);
         const double tolerance = integrator.getConstraintTolerance();
         if (dynamics->hasAndersenThermostat())
             dynamics->collideBodies(context, tolerance);
@@ -85,6 +86,18 @@ public:
     }
 
 protected:
+    /**
+     * On the CPU platform, the per-body work uses its Threads; read at the first step (the
+     * platform's properties cannot be asked for while the Context is being made).
+     */
+    void useThreadsOf(OpenMM::ContextImpl& context) {
+        if (threadsChecked)
+            return;
+        threadsChecked = true;
+        if (context.getPlatform().getName() == "CPU")
+            dynamics->setThreads(std::stoi(context.getPlatform().getPropertyValue(context.getOwner(), "Threads")));
+    }
+    bool threadsChecked = false;
     /** Throw naming the first particle whose value is not finite. */
     static void requireFinite(const std::vector<OpenMM::Vec3>& values, const char* what) {
         for (size_t i = 0; i < values.size(); i++)

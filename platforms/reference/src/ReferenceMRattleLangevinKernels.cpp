@@ -11,6 +11,7 @@ using std::vector;
 
 void ReferenceIntegrateMRattleLangevinStepKernel::execute(ContextImpl& context, const RigidBodyIntegrator& integrator,
                                                           bool& forcesAreValid) {
+    useThreadsOf(context);
     const double tolerance = integrator.getConstraintTolerance();
     if (dynamics->hasAndersenThermostat())
         dynamics->collideBodies(context, tolerance);

@@ -3,6 +3,7 @@
 #include "openmm/OpenMMException.h"
 #include "openmm/reference/ReferencePlatform.h"
 #include "openmm/reference/SimTKOpenMMRealType.h"
+#include <algorithm>
 #include <cmath>
 #include <sstream>
 #include <string>
@@ -79,6 +80,36 @@ RigidBodyMath::BodyView ReferenceRigidBodyDynamics::view(int body) const {
                                    shapes[body] != RigidBodyMath::Shape::General};
 }
 
+void ReferenceRigidBodyDynamics::setThreads(int numThreads) {
+    if (numThreads > 1)
+        threads.reset(new ThreadPool(numThreads));
+    else
+        threads.reset();
+}
+
+int ReferenceRigidBodyDynamics::forEachBody(const std::function<bool(int)>& work) {
+    const int numBodies = bodies.getNumBodies();
+    // A parallel region costs microseconds, a body a fraction of one: only many bodies pay.
+    if (!threads || numBodies < 256) {
+        for (int b = 0; b < numBodies; b++)
+            if (!work(b))
+                return b;
+        return INT_MAX;
+    }
+    const int numThreads = threads->getNumThreads();
+    vector<int> firstFailure(numThreads, INT_MAX);
+    threads->execute([&](ThreadPool&, int thread) {
+        const int begin = (long long) numBodies * thread / numThreads, end = (long long) numBodies * (thread + 1) / numThreads;
+        for (int b = begin; b < end; b++)
+            if (!work(b)) {
+                firstFailure[thread] = b;
+                return;
+            }
+    });
+    threads->waitForThreads();
+    return *std::min_element(firstFailure.begin(), firstFailure.end());
+}
+
 void ReferenceRigidBodyDynamics::updateShapes(const vector<Vec3>& positions) {
     const double* data = reinterpret_cast<const double*>(positions.data());
     for (int b = 0; b < bodies.getNumBodies(); b++) {
@@ -120,14 +151,16 @@ void ReferenceRigidBodyDynamics::driftAndReset(vector<Vec3>& x, const vector<Vec
                                   " would move to a position that is not finite; its force or velocity is not finite");
     }
     // Bodies: M-RATTLE's reset, new positions and velocities formed from displacements.
-    for (int b = 0; b < bodies.getNumBodies(); b++) {
-        RigidBodyMath::RotationSolve solve =
-            RigidBodyMath::driftAndResetBody(view(b), h, coordinates(x), coordinates(newVelocities), coordinates(newPositions));
-        if (!solve.converged)
-            throw OpenMMException("the position reset of rigid body " + std::to_string(b) + " found no rotation in " +
-                                  std::to_string(RigidBodyMath::MaxRotationIterations) +
-                                  " Newton iterations; the step size is too large for the forces, or they are not finite");
-    }
+    const double* oldPositions = coordinates(x);
+    double* velocities = coordinates(newVelocities);
+    double* positionsOut = coordinates(newPositions);
+    const int failed = forEachBody([&](int b) {
+        return RigidBodyMath::driftAndResetBody(view(b), h, oldPositions, velocities, positionsOut).converged;
+    });
+    if (failed != INT_MAX)
+        throw OpenMMException("the position reset of rigid body " + std::to_string(failed) + " found no rotation in " +
+                              std::to_string(RigidBodyMath::MaxRotationIterations) +
+                              " Newton iterations; the step size is too large for the forces, or they are not finite");
 }
 
 void ReferenceRigidBodyDynamics::constrainFreePositions(vector<Vec3>& oldPositions, vector<Vec3>& newPositions,
@@ -141,8 +174,10 @@ void ReferenceRigidBodyDynamics::projectVelocities(vector<Vec3>& positions, vect
         freeConstraints->applyToVelocities(positions, velocities, inverseMass, tolerance);
     const double* x = coordinates(positions);
     double* v = coordinates(velocities);
-    for (int b = 0; b < bodies.getNumBodies(); b++)
+    forEachBody([&](int b) {
         RigidBodyMath::projectBodyVelocities(view(b), x, v);
+        return true;
+    });
 }
 
 void ReferenceRigidBodyDynamics::projectNonRigidVelocities(vector<Vec3>& positions, vector<Vec3>& velocities,
@@ -151,8 +186,10 @@ void ReferenceRigidBodyDynamics::projectNonRigidVelocities(vector<Vec3>& positio
         freeConstraints->applyToVelocities(positions, velocities, inverseMass, tolerance);
     const double* x = coordinates(positions);
     double* v = coordinates(velocities);
-    for (int b = 0; b < bodies.getNumBodies(); b++)
+    forEachBody([&](int b) {
         RigidBodyMath::projectNonRigidBodyVelocities(view(b), x, v, RigidBodyMath::RigidVelocityTolerance);
+        return true;
+    });
 }
 
 void ReferenceRigidBodyDynamics::kickAndProject(ContextImpl& context, double stepSize, double tolerance) {

@@ -2,6 +2,7 @@
 #include "mrattle/RigidBodyRotor.h"
 #include "openmm/OpenMMException.h"
 #include "openmm/internal/ContextImpl.h"
+#include <climits>
 #include <cmath>
 
 using namespace MRattlePlugin;
@@ -23,10 +24,12 @@ void ReferenceIntegrateRigidSplittingStepKernel::integratePositions(ContextImpl&
     for (int i = 0; i < n; i++)
         newPositions[i] = (inverseMass[i] != 0 ? x[i] + (v[i] + f[i] * (0.5 * h * inverseMass[i])) * h : x[i]);
     dynamics->constrainFreePositions(x, newPositions, integrator.getConstraintTolerance());
-    for (int b = 0; b < bodies.getNumBodies(); b++)
-        if (!RigidBodyRotor::positionStep(dynamics->view(b), coordinates(x), coordinates(v), coordinates(f), h,
-                                          coordinates(newPositions), coordinates(newVelocities)))
-            throw OpenMMException("RigidSplittingIntegrator: rigid body " + std::to_string(b) +
+    const int failed = dynamics->forEachBody([&](int b) {
+        return RigidBodyRotor::positionStep(dynamics->view(b), coordinates(x), coordinates(v), coordinates(f), h,
+                                            coordinates(newPositions), coordinates(newVelocities));
+    });
+    if (failed != INT_MAX)
+        throw OpenMMException("RigidSplittingIntegrator: rigid body " + std::to_string(failed) +
                                   " would turn by more than a quarter turn in one step, or its motion is not finite; "
                                   "the step size is too large for the forces, or they are not finite");
     // Free particles: refuse what is not finite, as for bodies (the Context is not yet changed).
