@@ -15,9 +15,9 @@ namespace MRattlePlugin {
 class ReferenceIntegrateMRattleLangevinStepKernel : public ReferenceRigidBodyStepKernel<IntegrateMRattleLangevinStepKernel> {
 public:
     using ReferenceRigidBodyStepKernel::ReferenceRigidBodyStepKernel;
-    void execute(OpenMM::ContextImpl& context, const RigidBodyIntegrator& integrator, bool& forcesAreValid) override;
 
 protected:
+    void finishStep(OpenMM::ContextImpl& context, const RigidBodyIntegrator& integrator) override;
     void integratePositions(OpenMM::ContextImpl& context, const RigidBodyIntegrator& integrator) override;
 
 private:

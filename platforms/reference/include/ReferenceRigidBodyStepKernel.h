@@ -42,7 +42,7 @@ public:
         integratePositions(context, integrator);  // leaves the Context as it was if it throws
         forcesAreValid = false;
         context.calcForcesAndEnergy(true, false, integrator.getIntegrationForceGroups());
-        dynamics->kickAndProject(context, integrator.getStepSize(), tolerance);
+        finishStep(context, integrator);
         forcesAreValid = true;
     }
     void updateShapes(OpenMM::ContextImpl& context) override {
@@ -104,6 +104,13 @@ protected:
             if (!std::isfinite(values[i][0] + values[i][1] + values[i][2]))
                 throw OpenMM::OpenMMException(std::string("the ") + what + " of particle " + std::to_string(i) +
                                               " is not finite");
+    }
+    /**
+     * After the forces at the new positions: velocity Verlet's closing half kick and the
+     * projection (a leapfrog integrator only advances the clock); advances time and step count.
+     */
+    virtual void finishStep(OpenMM::ContextImpl& context, const RigidBodyIntegrator& integrator) {
+        dynamics->kickAndProject(context, integrator.getStepSize(), integrator.getConstraintTolerance());
     }
     /**
      * The first half of the step: half kick, drift, the integrator's position update,

@@ -9,18 +9,8 @@ using namespace MRattlePlugin;
 using namespace OpenMM;
 using std::vector;
 
-void ReferenceIntegrateMRattleLangevinStepKernel::execute(ContextImpl& context, const RigidBodyIntegrator& integrator,
-                                                          bool& forcesAreValid) {
-    useThreadsOf(context);
-    const double tolerance = integrator.getConstraintTolerance();
-    if (dynamics->hasAndersenThermostat())
-        dynamics->collideBodies(context, tolerance);
-    if (!forcesAreValid)
-        context.calcForcesAndEnergy(true, false, integrator.getIntegrationForceGroups());
-    integratePositions(context, integrator);  // leaves the Context as it was if it throws
-    forcesAreValid = false;
-    context.calcForcesAndEnergy(true, false, integrator.getIntegrationForceGroups());
-    forcesAreValid = true;
+void ReferenceIntegrateMRattleLangevinStepKernel::finishStep(ContextImpl& context, const RigidBodyIntegrator& integrator) {
+    // Leapfrog: the next step's kick uses these forces; the velocities stay mid-step.
     ReferenceRigidBodyDynamics::advanceClock(context, integrator.getStepSize());
 }
 

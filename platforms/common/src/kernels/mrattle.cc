@@ -165,6 +165,14 @@ DEVICE void bodyCenterAndVelocity(int start, int end, GLOBAL const int* RESTRICT
     *meanVelocity = momentum*(1/totalMass);
 }
 
+/** velocity += scale f / m for one atom (scale: the kick's time over the force buffer's fixed-point unit). */
+DEVICE mixed4 kicked(mixed4 velocity, mixed scale, GLOBAL const mm_long* RESTRICT force, int index, int paddedNumAtoms) {
+    velocity.x += scale*force[index]*velocity.w;
+    velocity.y += scale*force[index+paddedNumAtoms]*velocity.w;
+    velocity.z += scale*force[index+paddedNumAtoms*2]*velocity.w;
+    return velocity;
+}
+
 /**
  * Per atom: a kick over kickTime (0 for none) and a drift over h into newVelocity and posDelta (the state
  * itself is written only by applyPositionStep, once every body's reset has succeeded).
@@ -178,9 +186,7 @@ KERNEL void kickAndDrift(int numAtoms, int paddedNumAtoms, mixed kickTime, mixed
     for (int index = GLOBAL_ID; index < numAtoms; index += GLOBAL_SIZE) {
         mixed4 velocity = velm[index];
         if (velocity.w != 0) {
-            velocity.x += scale*force[index]*velocity.w;
-            velocity.y += scale*force[index+paddedNumAtoms]*velocity.w;
-            velocity.z += scale*force[index+paddedNumAtoms*2]*velocity.w;
+            velocity = kicked(velocity, scale, force, index, paddedNumAtoms);
             posDelta[index] = make_mixed4(h*velocity.x, h*velocity.y, h*velocity.z, 0);
             if (!(velocity.x*velocity.x + velocity.y*velocity.y + velocity.z*velocity.z <= 1e30f))
                 recordFailure(failure, step);  // not finite (NaN fails every comparison)
@@ -372,12 +378,8 @@ KERNEL void kickVelocities(int numAtoms, int paddedNumAtoms, mixed kickTime,
     const mixed scale = kickTime/(mixed) 0x100000000;
     for (int index = GLOBAL_ID; index < numAtoms; index += GLOBAL_SIZE) {
         mixed4 velocity = velm[index];
-        if (velocity.w != 0) {
-            velocity.x += scale*force[index]*velocity.w;
-            velocity.y += scale*force[index+paddedNumAtoms]*velocity.w;
-            velocity.z += scale*force[index+paddedNumAtoms*2]*velocity.w;
-            velm[index] = velocity;
-        }
+        if (velocity.w != 0)
+            velm[index] = kicked(velocity, scale, force, index, paddedNumAtoms);
     }
 }
 
