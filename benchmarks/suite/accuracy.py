@@ -77,10 +77,11 @@ def energy_vs_step(label, system, positions, velocities, bodies, methods, steps_
                                  platform, bodies)
             e = run["total"]
             ok = run["failure"] is None and len(e) > 2
+            drift, drift_error = stats.drift_with_error(run["time"], e) if ok else (float("nan"), float("nan"))
             rows.append({
                 "system": label, "method": method, "step_fs": h,
                 "fluctuation": float(np.std(e)) if ok else float("nan"),
-                "drift_per_ns": stats.drift_per_ns(run["time"], e) if ok else float("nan"),
+                "drift_per_ns": drift, "drift_error_per_ns": drift_error,
                 "rigidity_nm": float(run["rigidity"].max()) if run["rigidity"].size else float("nan"),
                 "failure": run["failure"] or "",
                 "dof": run["dof"],
@@ -235,3 +236,67 @@ def _projected_kinetic_energy(sites, masses, velocities, pairs, how):
             return float("nan")
     v = context.getState(getVelocities=True).getVelocities(asNumpy=True).value_in_unit(unit.nanometer / unit.picosecond)
     return float(0.5 * (masses[:, None] * v ** 2).sum())
+
+
+def _forward_and_back(system, positions, velocities, method, step_ps, steps, bodies, tolerance=1e-10):
+    """Run `steps` steps, reverse the velocities, run `steps` more: how far from the start it ends.
+
+    Reference platform (double precision, deterministic), so what is left is the method's own
+    irreversibility plus round-off (and, for CCMA, its constraint tolerance).
+    """
+    integrator = common.make_integrator(method, step_ps, tolerance, bodies)
+    context = openmm.Context(system, integrator, openmm.Platform.getPlatformByName("Reference"))
+    context.setPositions(positions)
+    context.setVelocities(velocities)
+    context.applyConstraints(tolerance)  # start exactly on the constraint surface for every method
+    context.applyVelocityConstraints(tolerance)
+    start = context.getState(getPositions=True, getVelocities=True)
+    x0 = start.getPositions(asNumpy=True).value_in_unit(unit.nanometer)
+    v0 = start.getVelocities(asNumpy=True).value_in_unit(unit.nanometer / unit.picosecond)
+    integrator.step(steps)
+    state = context.getState(getVelocities=True, getForces=True)
+    v = state.getVelocities(asNumpy=True).value_in_unit(unit.nanometer / unit.picosecond)
+    if method == "Verlet + CCMA":
+        # OpenMM's VerletIntegrator is leapfrog: it stores v(t - dt/2), so the reversed run
+        # must start from -v(t + dt/2) = -(v(t - dt/2) + dt f(t)/m).
+        f = state.getForces(asNumpy=True).value_in_unit(unit.kilojoule_per_mole / unit.nanometer)
+        m = np.array([system.getParticleMass(i).value_in_unit(unit.dalton) for i in range(system.getNumParticles())])
+        v = v + step_ps * f / m[:, None]
+    context.setVelocities(-v)
+    integrator.step(steps)
+    end = context.getState(getPositions=True, getVelocities=True)
+    x = end.getPositions(asNumpy=True).value_in_unit(unit.nanometer)
+    vb = end.getVelocities(asNumpy=True).value_in_unit(unit.nanometer / unit.picosecond)
+    return {"position_error_nm": float(np.max(np.linalg.norm(x - x0, axis=1)))}
+
+
+def reversibility(step_counts, step_fs, log):
+    """Time reversibility of each method on the suite's systems (forward, reverse velocities, back)."""
+    benzene = mrattle.models.benzene()
+    bx = _positions(benzene)
+    bbodies = _bodies(benzene)
+    bv = common.rigid_velocities(benzene.system, bx, bbodies, 300.0, seed=3)
+    cluster = mrattle.models.benzeneCluster(temperature=250 * unit.kelvin, seed=1)
+    cx = _positions(cluster)
+    cv = np.array(cluster.velocities.value_in_unit(unit.nanometer / unit.picosecond))
+    cbodies = _bodies(cluster)
+    tsys, tx, tbodies = common.tetrahedral_cluster(constraints=9)
+    tv = common.rigid_velocities(tsys, tx, tbodies, 200.0, seed=5)
+    cases = [("isolated benzene", benzene.system, bx, bv, bbodies, ["M-RATTLE", "splitting"]),
+             ("27-benzene cluster", cluster.system, cx, cv, cbodies, ["M-RATTLE", "splitting"]),
+             ("27 tetrahedral 5-site", tsys, tx, tv, tbodies,
+              ["M-RATTLE", "splitting", "RATTLE (CustomIntegrator)", "Verlet + CCMA"])]
+    rows = []
+    for label, system, x, v, bodies, methods in cases:
+        for method in methods:
+            constrained = method in ("Verlet + CCMA", "RATTLE (CustomIntegrator)")
+            for tolerance in ([1e-8, 1e-10, 1e-12] if constrained else [None]):
+                name = method + (" (tolerance %g)" % tolerance if constrained else "")
+                row = {"system": label, "method": name, "step_fs": step_fs}
+                for steps in step_counts:
+                    row["error_after_%d" % steps] = _forward_and_back(
+                        system, x, v, method, step_fs * common.FS, steps, bodies, tolerance or 1e-10)["position_error_nm"]
+                rows.append(row)
+                log("  reversibility %-22s %-40s %s" % (label, name, "  ".join(
+                    "%d: %.2e nm" % (n, row["error_after_%d" % n]) for n in step_counts)))
+    return rows

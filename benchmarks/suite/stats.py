@@ -18,6 +18,19 @@ def drift_per_ns(times_ps, energies):
     return float(slope) * 1000.0
 
 
+def drift_with_error(times_ps, energies):
+    """Drift (kJ/mol/ns) and its standard error: the least-squares slope's error, inflated by the
+    residuals' statistical inefficiency (energies sampled along a trajectory are correlated)."""
+    t = np.asarray(times_ps, float)
+    e = np.asarray(energies, float)
+    slope, intercept = np.polyfit(t, e, 1)
+    residuals = e - (slope * t + intercept)
+    if t.size < 4:
+        return float(slope) * 1000.0, float("nan")
+    naive = math.sqrt(np.dot(residuals, residuals) / (t.size - 2) / np.sum((t - t.mean()) ** 2))
+    return float(slope) * 1000.0, naive * math.sqrt(statistical_inefficiency(residuals)) * 1000.0
+
+
 def ks_two_sample(a, b):
     """Two-sample Kolmogorov-Smirnov statistic and asymptotic p-value.
 

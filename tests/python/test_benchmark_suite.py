@@ -56,6 +56,27 @@ def test_quick_suite_writes_every_section(tmp_path):
             assert r["failure"] == ""
             assert float(r["rigidity_nm"]) < 1e-10
 
+    # Reversibility: the rigid-body methods return to round-off, OpenMM's constrained ones to their tolerance.
+    assert "### Time reversibility" in text
+    for r in read(results / "accuracy_reversibility.csv"):
+        if r["method"] in ("M-RATTLE", "splitting"):
+            assert float(r["error_after_10"]) < 1e-13, r
+        elif "tolerance 1e-08" in r["method"]:
+            assert float(r["error_after_10"]) > 1e-11, r
+
+
+def test_a_partial_run_replaces_only_its_own_sections():
+    sys.path.insert(0, os.path.join(ROOT, "benchmarks"))
+    import run_suite
+    existing = "# Results\n\nintro\n\n## Cost\n\nold cost\n\n## Accuracy\n\nold accuracy\n### Sub\nold\n" \
+               "\n## Sampling\n\nold sampling\n\nTotal wall time of this run: 3.0 minutes.\n"
+    merged = run_suite.splice_sections(existing, "\n## Accuracy\n\nnew accuracy\n\n## Extra\n\nnew extra\n", "*stamp*\n")
+    assert "old accuracy" not in merged and "### Sub" not in merged and "new accuracy" in merged
+    assert merged.index("## Cost") < merged.index("## Accuracy") < merged.index("## Sampling") < merged.index("## Extra")
+    assert "old cost" in merged and "old sampling" in merged and merged.startswith("# Results\n\nintro")
+    assert merged.count("*stamp*") == 2 and merged.index("*stamp*") > merged.index("## Accuracy")
+    assert merged.rstrip().endswith("Total wall time of this run: 3.0 minutes.")
+
 
 def test_quick_langevin_validation_writes_its_section(tmp_path):
     subprocess.run([sys.executable, os.path.join(ROOT, "benchmarks", "run_suite.py"), "--quick", "--build", BUILD,
@@ -67,3 +88,23 @@ def test_quick_langevin_validation_writes_its_section(tmp_path):
     assert 200 < float(rows["T"]["mrattle"]) < 400 and 200 < float(rows["T"]["settle"]) < 400
     assert 0.8 < float(rows["density"]["mrattle"]) < 1.2
     assert 1.5 < float(rows["gOO_peak"]["mrattle"]) < 4
+
+
+def test_drift_standard_error_covers_the_true_slope():
+    sys.path.insert(0, os.path.join(ROOT, "benchmarks"))
+    import numpy as np
+    from suite import stats
+    rng = np.random.default_rng(4)
+    t = np.linspace(0.0, 10.0, 2001)  # ps
+    errors = []
+    for _ in range(200):
+        # Correlated noise (AR(1), correlation time 20 samples): the naive error would be ~6x too small.
+        noise = np.zeros(t.size)
+        for i in range(1, t.size):
+            noise[i] = 0.95 * noise[i - 1] + rng.normal()
+        slope, se = stats.drift_with_error(t, 0.002 * t + 0.1 * noise)
+        errors.append((slope - 2.0) / se)
+    errors = np.array(errors)
+    # Standardised errors: about unit spread, so the reported error bars are honest (not 6x small).
+    assert 0.7 < errors.std() < 1.4, errors.std()
+    assert abs(errors.mean()) < 0.3
