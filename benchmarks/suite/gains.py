@@ -74,8 +74,8 @@ def nve(system, state, integrator, picoseconds, sample_every_ps=0.05):
         energies.append(e)
     steps = len(times) * stride
     ns_per_day = (steps * h * 1e-3) / (wall / 86400.0) if wall > 0 else float("nan")
-    drift = stats.drift_per_ns(times, energies) if len(times) > 2 else float("nan")
-    return {"ns_per_day": ns_per_day, "drift_per_ns": drift, "failure": failure,
+    drift, drift_error = stats.drift_with_error(times, energies) if len(times) > 2 else (float("nan"), float("nan"))
+    return {"ns_per_day": ns_per_day, "drift_per_ns": drift, "drift_error_per_ns": drift_error, "failure": failure,
             "fluctuation": float(np.std(energies)) if energies else float("nan")}
 
 
@@ -100,11 +100,12 @@ def compare(num_molecules, rigid_steps_fs, nve_ps, equilibrate_ps, log):
 
 
 def largest_stable(rows, tolerance_per_dof):
-    """Largest rigid step whose |drift| per degree of freedom is within the tolerance (kJ/mol/ns)."""
+    """Largest rigid step whose |drift| per degree of freedom, plus two standard errors, is within
+    the tolerance (kJ/mol/ns): a step counts only if its error bars show it meets the criterion."""
     best = None
     for r in rows:
-        if r["integrator"] == "MRattleIntegrator" and r["failure"] is None and \
-                abs(r["drift_per_ns"]) / r["dof"] <= tolerance_per_dof:
+        bound = abs(r["drift_per_ns"]) + 2 * r.get("drift_error_per_ns", 0.0)
+        if r["integrator"] == "MRattleIntegrator" and r["failure"] is None and bound / r["dof"] <= tolerance_per_dof:
             if best is None or r["step_fs"] > best["step_fs"]:
                 best = r
     return best
