@@ -56,6 +56,11 @@ def test_quick_suite_writes_every_section(tmp_path):
             assert r["failure"] == ""
             assert float(r["rigidity_nm"]) < 1e-10
 
+    # Steady-state sampling of liquid benzene: physical numbers, the P-conserved equipartition target.
+    liquid = {r["quantity"]: r for r in read(results / "sampling_liquid_comparison.csv")}
+    assert 200 < float(liquid["temperature (K)"]["M-RATTLE mean"]) < 450
+    assert abs(float(liquid["equipartition target for that ratio (P conserved)"]["M-RATTLE mean"]) - 64 / 63) < 1e-12
+
     # Reversibility: the rigid-body methods return to round-off, OpenMM's constrained ones to their tolerance.
     assert "### Time reversibility" in text
     for r in read(results / "accuracy_reversibility.csv"):
