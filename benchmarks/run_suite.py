@@ -372,13 +372,7 @@ def sampling_section(rows, runs, per_run, eq, step, quick):
               "rotational kinetic energy per molecule exceeds the translational; the target ratio is computed "
               "frame by frame from the cluster's inertia (`sampling.equipartition_target`).\n" % (
                   runs, step, per_run, eq, 100.0 / 27))
-    md.append(table(rows, [("quantity", "quantity"), ("M-RATTLE mean", "M-RATTLE mean"),
-                           ("splitting mean", "splitting mean"),
-                           ("spread of run means", lambda r: r.get("spread of run means", "")),
-                           ("KS D", "KS D"), ("KS p", "KS p"),
-                           ("independent samples", "independent samples")],
-                    {"M-RATTLE mean": "%.4g", "splitting mean": "%.4g", "spread of run means": "%.3g",
-                     "KS D": "%.3f", "KS p": "%.3f"}))
+    md.append(sampling_table(rows))
     md.append("Means are over all frames after equilibration (kelvin for temperature, kJ/mol per molecule for "
               "kinetic energies). Caveat: a small cluster in vacuum can lose a molecule, and runs started from "
               "different seeds settle at different temperatures; frames are decorrelated within a run but runs "
@@ -406,14 +400,19 @@ def liquid_sampling_section(rows, molecules, runs, eq, per_run, drop, dof):
               "and velocities, so their means are close by construction over short runs; compare the "
               "differences with the spread of run means. Drift: per-run slope of the total energy.\n" % (
                   molecules, eq, runs, per_run, drop, dof))
-    md.append(table(rows, [("quantity", "quantity"), ("M-RATTLE mean", "M-RATTLE mean"),
-                           ("splitting mean", "splitting mean"),
-                           ("spread of run means", lambda r: r.get("spread of run means", "")),
-                           ("KS D", "KS D"), ("KS p", "KS p"), ("independent samples", "independent samples")],
-                    {"M-RATTLE mean": "%.4g", "splitting mean": "%.4g", "spread of run means": "%.3g",
-                     "KS D": "%.3f", "KS p": "%.3f"}))
+    md.append(sampling_table(rows))
     md += sampling_verdict([r for r in rows if not r["quantity"].startswith("energy drift")])
     return md
+
+
+def sampling_table(rows):
+    """The methods' means, spread of run means and KS test, one row per quantity."""
+    return table(rows, [("quantity", "quantity"), ("M-RATTLE mean", "M-RATTLE mean"),
+                        ("splitting mean", "splitting mean"),
+                        ("spread of run means", lambda r: r.get("spread of run means", "")),
+                        ("KS D", "KS D"), ("KS p", "KS p"), ("independent samples", "independent samples")],
+                 {"M-RATTLE mean": "%.4g", "splitting mean": "%.4g", "spread of run means": "%.3g",
+                  "KS D": "%.3f", "KS p": "%.3f"})
 
 
 def sampling_verdict(rows):

@@ -184,12 +184,14 @@ def tetrahedral_cluster(num_per_side=3, spacing=0.55, seed=7, constraints=None, 
     return system, positions, bodies
 
 
-def rigid_velocities(system, positions, bodies, temperature, seed=1):
+def rigid_velocities(system, positions, bodies, temperature, seed=1, box=None):
     """Rigid-body Maxwell-Boltzmann velocities at exactly `temperature` (via M-RATTLE's projection)."""
     integrator = mrattle.MRattleIntegrator(0.001)
     for body in bodies:
         integrator.addRigidBody(body)
     context = openmm.Context(system, integrator, openmm.Platform.getPlatformByName("Reference"))
+    if box is not None:
+        context.setPeriodicBoxVectors(*box)
     context.setPositions(positions)
     context.setVelocitiesToTemperature(temperature, seed)
     return context.getState(getVelocities=True).getVelocities(asNumpy=True).value_in_unit(

@@ -47,11 +47,9 @@ def run(method, total_ps, step_fs, temperature, seed, log):
         temps.append(2 * ke / (dof * KB))
         x = state.getPositions(asNumpy=True).value_in_unit(unit.nanometer).reshape(n_mol, 12, 3)
         v = state.getVelocities(asNumpy=True).value_in_unit(unit.nanometer / unit.picosecond).reshape(n_mol, 12, 3)
-        vcm = (masses[None, :, None] * v).sum(1) / masses.sum()
-        ke_trans = 0.5 * masses.sum() * (vcm ** 2).sum(1)
-        ke_total = 0.5 * (masses[None, :, None] * v ** 2).sum((1, 2))
-        trans.append(ke_trans.mean())
-        rot.append((ke_total - ke_trans).mean())
+        ke_trans, ke_rot = kinetic_energy_per_molecule(v, masses)
+        trans.append(ke_trans)
+        rot.append(ke_rot)
         expected, farthest = equipartition_target(x, masses)
         target.append(expected)
         radius.append(farthest)
@@ -65,6 +63,35 @@ def run(method, total_ps, step_fs, temperature, seed, log):
     return {"temperature": np.array(temps), "translational": np.array(trans), "rotational": np.array(rot),
             "cc": np.array(cc), "target": np.array(target), "radius": np.array(radius),
             "frame_ps": stride * step_fs * common.FS}
+
+
+def kinetic_energy_per_molecule(v, masses, relative_to_system=False):
+    """Mean translational and rotational kinetic energy per molecule (kJ/mol).
+
+    v: (molecules, sites, 3) nm/ps; masses: the sites' masses. relative_to_system: take
+    translation relative to the whole system's centre of mass (a conserved total momentum
+    carries kinetic energy that is no part of equipartition).
+    """
+    vcm = (masses[None, :, None] * v).sum(1) / masses.sum()
+    ke_total = 0.5 * (masses[None, :, None] * v ** 2).sum((1, 2))
+    ke_centres = 0.5 * masses.sum() * (vcm ** 2).sum(1)
+    ke_trans = 0.5 * masses.sum() * ((vcm - vcm.mean(0)) ** 2).sum(1) if relative_to_system else ke_centres
+    return float(ke_trans.mean()), float((ke_total - ke_centres).mean())
+
+
+def scalar_rows(results, labels):
+    """Per quantity: each method's mean, the spread of run means, and a KS test on the
+    decorrelated pooled samples. results: {method: {name: [one array per run]}}."""
+    rows = []
+    for name, label in labels.items():
+        a = _decorrelated(results["M-RATTLE"][name])
+        b = _decorrelated(results["splitting"][name])
+        d, p = stats.ks_two_sample(a, b)
+        rows.append({"quantity": label, "M-RATTLE mean": float(np.concatenate(results["M-RATTLE"][name]).mean()),
+                     "splitting mean": float(np.concatenate(results["splitting"][name]).mean()),
+                     "spread of run means": _run_spread(results, name),
+                     "KS D": d, "KS p": p, "independent samples": (len(a), len(b))})
+    return rows
 
 
 def _inertia(points, masses):
@@ -107,15 +134,8 @@ def _run_spread(results, name):
 
 def compare(results):
     """Means, KS tests on decorrelated pooled samples, and equipartition per method."""
-    rows = []
-    for name in ("temperature", "translational", "rotational", "radius"):
-        a = _decorrelated(results["M-RATTLE"][name])
-        b = _decorrelated(results["splitting"][name])
-        d, p = stats.ks_two_sample(a, b)
-        rows.append({"quantity": LABELS.get(name, name), "M-RATTLE mean": float(np.concatenate(results["M-RATTLE"][name]).mean()),
-                     "splitting mean": float(np.concatenate(results["splitting"][name]).mean()),
-                     "spread of run means": _run_spread(results, name),
-                     "KS D": d, "KS p": p, "independent samples": (len(a), len(b))})
+    rows = scalar_rows(results, {name: LABELS.get(name, name)
+                                 for name in ("temperature", "translational", "rotational", "radius")})
     # C-C distances: the per-frame fraction of pairs within the first peak (< 0.6 nm), a
     # scalar series that can be decorrelated; the pooled histograms are in the plot.
     shell = {m: [(c < 0.6).mean(1) for c in r["cc"]] for m, r in results.items()}

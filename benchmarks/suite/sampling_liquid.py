@@ -43,14 +43,11 @@ def run(system, state, method, velocities, total_ps, step_fs):
         ke = s.getKineticEnergy().value_in_unit(unit.kilojoule_per_mole)
         pe = s.getPotentialEnergy().value_in_unit(unit.kilojoule_per_mole)
         v = s.getVelocities(asNumpy=True).value_in_unit(unit.nanometer / unit.picosecond).reshape(n_mol, 12, 3)
-        vcm = (masses[None, :, None] * v).sum(1) / masses.sum()
-        # Translation relative to the system's centre of mass: fresh random velocities carry a
-        # (conserved) total momentum whose kinetic energy is not part of the equipartition.
-        ke_trans = 0.5 * masses.sum() * ((vcm - vcm.mean(0)) ** 2).sum(1)
-        ke_total = 0.5 * (masses[None, :, None] * v ** 2).sum((1, 2))
+        # Fresh random velocities carry a conserved total momentum: translation is taken relative to it.
+        ke_trans, ke_rot = sampling.kinetic_energy_per_molecule(v, masses, relative_to_system=True)
         out["temperature"].append(2 * ke / (dof * sampling.KB))
-        out["translational"].append(ke_trans.mean())
-        out["rotational"].append((ke_total - ke_trans).mean())
+        out["translational"].append(ke_trans)
+        out["rotational"].append(ke_rot)
         out["potential"].append(pe / n_mol)
         out["energy"].append(ke + pe)
         out["time"].append(s.getTime().value_in_unit(unit.picosecond))
@@ -68,7 +65,8 @@ def run_many(num_molecules, seeds, equilibrate_ps, total_ps, drop_ps, step_fs, l
     drifts = {m: [] for m in results}
     skip = int(round(drop_ps / 0.1))
     for seed in seeds:
-        velocities = _rigid_velocities(system, state, bodies, seed)
+        velocities = common.rigid_velocities(system, state.getPositions(), bodies, 300.0, seed,
+                                             box=state.getPeriodicBoxVectors())
         for method in results:
             r = run(system, state, method, velocities, total_ps, step_fs)
             for k in results[method]:
@@ -80,29 +78,9 @@ def run_many(num_molecules, seeds, equilibrate_ps, total_ps, drop_ps, step_fs, l
     return results, drifts, dof
 
 
-def _rigid_velocities(system, state, bodies, seed):
-    integrator = mrattle.MRattleIntegrator(0.001)
-    for body in bodies:
-        integrator.addRigidBody(body)
-    context = openmm.Context(system, integrator, openmm.Platform.getPlatformByName("Reference"))
-    context.setPeriodicBoxVectors(*state.getPeriodicBoxVectors())
-    context.setPositions(state.getPositions())
-    context.setVelocitiesToTemperature(300 * unit.kelvin, seed)
-    return context.getState(getVelocities=True).getVelocities()
-
-
 def compare(results, drifts, num_molecules):
     """Means with the spread of run means, KS tests on decorrelated pooled samples, equipartition, drift."""
-    rows = []
-    for name, label in LABELS.items():
-        a = np.concatenate([stats.decorrelate(r) for r in results["M-RATTLE"][name]])
-        b = np.concatenate([stats.decorrelate(r) for r in results["splitting"][name]])
-        d, p = stats.ks_two_sample(a, b)
-        means = [r.mean() for m in results.values() for r in m[name]]
-        rows.append({"quantity": label, "M-RATTLE mean": float(np.concatenate(results["M-RATTLE"][name]).mean()),
-                     "splitting mean": float(np.concatenate(results["splitting"][name]).mean()),
-                     "spread of run means": float(np.std(means, ddof=1)), "KS D": d, "KS p": p,
-                     "independent samples": (len(a), len(b))})
+    rows = sampling.scalar_rows(results, LABELS)
     ratios = {m: [rot.mean() / tr.mean() for rot, tr in zip(r["rotational"], r["translational"])]
               for m, r in results.items()}
     rows.append({"quantity": "rotational / translational KE", "M-RATTLE mean": float(np.mean(ratios["M-RATTLE"])),
