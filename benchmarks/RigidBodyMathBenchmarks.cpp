@@ -1,7 +1,8 @@
 /*
  * Micro-benchmarks of the numerical core, per body of k atoms (k = 3, 5, 12, 30):
- *  - MRattlePositionUpdate: drift y* = x + h v, M-RATTLE position reset (the rotation
- *    solve), v = (x_new - x) / h: what M-RATTLE does to a body's positions each step.
+ *  - MRattlePositionUpdate: RigidBodyMath::driftAndResetBody, what the kernels do to a
+ *    body's positions each step: drift x + h v, M-RATTLE position reset (the rotation
+ *    solve), v = (x_new - x) / h.
  *  - SplittingPositionUpdate: the splitting baseline's position half step for the same
  *    body (momenta from velocities, principal frame, free rotor, new x and v).
  *  - ProjectBodyVelocities: the velocity reset (RATTLE's velocity step), shared by both.
@@ -73,17 +74,12 @@ void perBodyCounter(benchmark::State& state) {
 
 void MRattlePositionUpdate(benchmark::State& state) {
     Batch batch(state.range(0));
-    const int k = batch.atomsPerBody;
     for (auto _ : state) {
         for (int b = 0; b < BatchSize; b++) {
-            const int begin = 3 * b * k, end = 3 * (b + 1) * k;
-            for (int i = begin; i < end; i++)
-                batch.scratchPositions[i] = batch.positions[i] + StepSize * batch.velocities[i];
-            RigidBodyMath::RotationSolve solve = RigidBodyMath::resetBodyPositions(
-                batch.view(b), batch.positions.data(), batch.scratchPositions.data());
+            RigidBodyMath::RotationSolve solve = RigidBodyMath::driftAndResetBody(
+                batch.view(b), StepSize, batch.positions.data(), batch.velocities.data(),
+                batch.scratchPositions.data());
             benchmark::DoNotOptimize(solve.iterations);
-            for (int i = begin; i < end; i++)
-                batch.velocities[i] = (batch.scratchPositions[i] - batch.positions[i]) / StepSize;
         }
         std::swap(batch.positions, batch.scratchPositions);
     }

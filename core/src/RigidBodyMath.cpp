@@ -26,6 +26,21 @@ Matrix3d crossMatrix(const Vector3d& w) {
     return m;
 }
 
+/**
+ * I^-1 b for the inertia I = tr(J) - J of a second moment J given by its six entries, by
+ * I's cofactors (I and its adjugate are symmetric). No pivoting: an inertia tensor needs
+ * none; the result is not finite if I is singular.
+ */
+Vector3d solveInertia(double j00, double j01, double j02, double j11, double j12, double j22, const Vector3d& b) {
+    const double traceJ = j00 + j11 + j22;
+    const double i00 = traceJ - j00, i11 = traceJ - j11, i22 = traceJ - j22;
+    const double c00 = i11 * i22 - j12 * j12, c01 = j01 * i22 + j12 * j02, c02 = j01 * j12 + i11 * j02;
+    const double c11 = i00 * i22 - j02 * j02, c12 = i00 * j12 + j01 * j02, c22 = i00 * i11 - j01 * j01;
+    const double inverseDet = 1.0 / (i00 * c00 - j01 * c01 - j02 * c02);
+    return Vector3d(c00 * b[0] + c01 * b[1] + c02 * b[2], c01 * b[0] + c11 * b[1] + c12 * b[2],
+                    c02 * b[0] + c12 * b[1] + c22 * b[2]) * inverseDet;
+}
+
 /** Unit vector along a linear body: the direction of its atom farthest from the centre. */
 Vector3d linearAxis(const BodyView& body, const double* positions, const Vector3d& center) {
     Vector3d farthest = Vector3d::Zero();
@@ -123,12 +138,6 @@ Matrix3d rotationMinusIdentity(const Vector3d& d) {
     return a * D + b * D * D;
 }
 
-/** cay(d) - 1 = (1 - [d]/2)^-1 (1 + [d]/2) - 1 = 2 ([w]x + [w]x^2) / (1 + |w|^2), w = d/2. */
-Matrix3d cayleyMinusIdentity(const Vector3d& d) {
-    Matrix3d W = crossMatrix(0.5 * d);
-    return (2.0 / (1.0 + 0.25 * d.squaredNorm())) * (W + W * W);
-}
-
 } // namespace
 
 Shape classifyShape(const Matrix3d& secondMoment, double totalMass) {
@@ -146,39 +155,91 @@ RotationSolve solveResetRotation(const Matrix3d& J, const Matrix3d& Y) {
 }
 
 RotationSolve solveResetRotationForTorque(const Matrix3d& J, const Vector3d& target) {
-    // The rotation of one step is small, so P = 1 + Delta is carried as Delta: the residual
-    // vex(P J - J P^T) = vex(Delta J - J Delta^T) (J symmetric) then has round-off relative
-    // to the rotation itself, not to J, and the torque condition holds to that precision.
-    // Updates are Cayley rotations, orthogonal to round-off without trigonometry; they
-    // agree with exp([d]x) to first order, so Newton still converges quadratically.
+    // P is parametrised by its half Gibbs vector w (tan of half the angle along the axis):
+    // P - 1 = c ([w]x + [w]x^2), c = 2 / (1 + |w|^2), orthogonal to round-off for any w and
+    // formed without the identity, so a small rotation keeps its digits. With I = tr(J) - J,
+    // vex(D J - J D^T) = c (I w + (J w) x w) for D = P - 1, and the condition times 1/c is
+    // the quadratic F(w) = I w + (J w) x w - (1 + |w|^2) target / 2 = 0, solved with
+    // 3-vector algebra and closed-form 3x3 inverses (scalar code: Eigen's fixed-size
+    // expressions cost several times more here).
     RotationSolve result;
     result.iterations = MaxRotationIterations;
-    Matrix3d delta = Matrix3d::Zero();
-    for (int iteration = 0; iteration < MaxRotationIterations; iteration++) {
-        Matrix3d deltaJ = delta * J;
-        Vector3d r = vexOfSkewPart(deltaJ) - target;
-        if (r.isZero(0.0)) {
-            result.iterations = iteration;
-            result.converged = true;
-            break;
+    const double j00 = J(0, 0), j01 = J(0, 1), j02 = J(0, 2), j11 = J(1, 1), j12 = J(1, 2), j22 = J(2, 2);
+    const double traceJ = j00 + j11 + j22;
+    const double i00 = traceJ - j00, i11 = traceJ - j11, i22 = traceJ - j22;   // I = tr(J) - J
+    const double t0 = 0.5 * target[0], t1 = 0.5 * target[1], t2 = 0.5 * target[2];
+    // At w = 0 the Jacobian is the inertia: the first iterate is the linearised answer.
+    const Vector3d linear = solveInertia(j00, j01, j02, j11, j12, j22, Vector3d(t0, t1, t2));
+    double w0 = linear[0], w1 = linear[1], w2 = linear[2];
+    // Newton while far from the root; near it the Jacobian is kept (a chord step), whose
+    // error shrinks by about the previous correction's relative size: a thermal step needs
+    // the linear solve, one Jacobian and two residuals.
+    double g[9];   // inverse Jacobian, row-major
+    bool newJacobian = true;
+    double previousStep = std::sqrt(w0 * w0 + w1 * w1 + w2 * w2);
+    for (int iteration = 1; iteration < MaxRotationIterations; iteration++) {
+        const double jw0 = j00 * w0 + j01 * w1 + j02 * w2;
+        const double jw1 = j01 * w0 + j11 * w1 + j12 * w2;
+        const double jw2 = j02 * w0 + j12 * w1 + j22 * w2;
+        const double scale = 1.0 + w0 * w0 + w1 * w1 + w2 * w2;
+        // F = I w + (J w) x w - (1 + |w|^2) target / 2, with I w = tr(J) w - J w.
+        const double f0 = traceJ * w0 - jw0 + (jw1 * w2 - jw2 * w1) - scale * t0;
+        const double f1 = traceJ * w1 - jw1 + (jw2 * w0 - jw0 * w2) - scale * t1;
+        const double f2 = traceJ * w2 - jw2 + (jw0 * w1 - jw1 * w0) - scale * t2;
+        if (newJacobian) {
+            // G = dF/dw = I - [w]x J + [J w]x - 2 t w^T (t = target / 2); ([w]x J)(r,c) = (w x J_c)_r.
+            const double a00 = i00 - (w1 * j02 - w2 * j01) - 2 * t0 * w0;
+            const double a01 = -j01 - (w1 * j12 - w2 * j11) - jw2 - 2 * t0 * w1;
+            const double a02 = -j02 - (w1 * j22 - w2 * j12) + jw1 - 2 * t0 * w2;
+            const double a10 = -j01 - (w2 * j00 - w0 * j02) + jw2 - 2 * t1 * w0;
+            const double a11 = i11 - (w2 * j01 - w0 * j12) - 2 * t1 * w1;
+            const double a12 = -j12 - (w2 * j02 - w0 * j22) - jw0 - 2 * t1 * w2;
+            const double a20 = -j02 - (w0 * j01 - w1 * j00) - jw1 - 2 * t2 * w0;
+            const double a21 = -j12 - (w0 * j11 - w1 * j01) + jw0 - 2 * t2 * w1;
+            const double a22 = i22 - (w0 * j12 - w1 * j02) - 2 * t2 * w2;
+            const double b00 = a11 * a22 - a12 * a21, b01 = a02 * a21 - a01 * a22, b02 = a01 * a12 - a02 * a11;
+            const double b10 = a12 * a20 - a10 * a22, b11 = a00 * a22 - a02 * a20, b12 = a02 * a10 - a00 * a12;
+            const double b20 = a10 * a21 - a11 * a20, b21 = a01 * a20 - a00 * a21, b22 = a00 * a11 - a01 * a10;
+            const double inverseDet = 1.0 / (a00 * b00 + a01 * b10 + a02 * b20);
+            g[0] = b00 * inverseDet; g[1] = b01 * inverseDet; g[2] = b02 * inverseDet;
+            g[3] = b10 * inverseDet; g[4] = b11 * inverseDet; g[5] = b12 * inverseDet;
+            g[6] = b20 * inverseDet; g[7] = b21 * inverseDet; g[8] = b22 * inverseDet;
         }
-        Matrix3d PJ = J + deltaJ;
-        Matrix3d K = PJ.trace() * Matrix3d::Identity() - PJ;
-        Vector3d d = -K.inverse() * r;
-        if (!d.allFinite())
+        const double s0 = g[0] * f0 + g[1] * f1 + g[2] * f2;
+        const double s1 = g[3] * f0 + g[4] * f1 + g[5] * f2;
+        const double s2 = g[6] * f0 + g[7] * f1 + g[8] * f2;
+        w0 -= s0;
+        w1 -= s1;
+        w2 -= s2;
+        const double stepSize = std::sqrt(s0 * s0 + s1 * s1 + s2 * s2);
+        const double size = std::sqrt(w0 * w0 + w1 * w1 + w2 * w2);
+        if (!std::isfinite(size))
             break;
-        Matrix3d E = cayleyMinusIdentity(d);
-        delta += E + E * delta;
-        // Quadratic convergence: after a correction of relative size e the error is about
-        // e^2, so a correction below 1e-7 of the rotation leaves it at round-off.
-        if (d.squaredNorm() <= 1e-14 * delta.squaredNorm()) {
+        // The error left is about the step times the rate at which steps shrink.
+        if (stepSize * stepSize <= 1e-15 * size * previousStep) {
             result.iterations = iteration + 1;
             result.converged = true;
             break;
         }
+        newJacobian = !(stepSize <= 1e-3 * size);
+        previousStep = stepSize;
     }
-    result.rotation = Matrix3d::Identity() + delta;
-    result.rotationMinusIdentity = delta;
+    if (!result.converged)
+        return result;
+    // P - 1 = c ([w]x + w w^T - |w|^2).
+    const double w2sum = w0 * w0 + w1 * w1 + w2 * w2, c = 2.0 / (1.0 + w2sum);
+    Matrix3d& D = result.rotationMinusIdentity;
+    D(0, 0) = c * (w0 * w0 - w2sum);
+    D(1, 1) = c * (w1 * w1 - w2sum);
+    D(2, 2) = c * (w2 * w2 - w2sum);
+    D(0, 1) = c * (w0 * w1 - w2);
+    D(1, 0) = c * (w0 * w1 + w2);
+    D(0, 2) = c * (w0 * w2 + w1);
+    D(2, 0) = c * (w0 * w2 - w1);
+    D(1, 2) = c * (w1 * w2 - w0);
+    D(2, 1) = c * (w1 * w2 + w0);
+    result.rotation = D;
+    result.rotation.diagonal().array() += 1.0;
     return result;
 }
 
@@ -193,16 +254,27 @@ RotationSolve solveBodyRotation(const BodyView& body, const double* oldPositions
                                 Displacement displacement) {
     if (body.linear)
         return solveLinearRotation(body, oldPositions, oldCenter, displacement);
-    // Torque target sum m a x y = sum m a x (y - a).
-    Matrix3d J = Matrix3d::Zero();
-    Vector3d target = Vector3d::Zero();
+    // Torque target sum m a x y = sum m a x (y - a). Scalar sums of J's six entries: Eigen's
+    // 3x3 outer products cost several times more here.
+    const double o0 = oldCenter[0], o1 = oldCenter[1], o2 = oldCenter[2];
+    double j00 = 0, j01 = 0, j02 = 0, j11 = 0, j12 = 0, j22 = 0, t0 = 0, t1 = 0, t2 = 0;
     for (int k = 0; k < body.numAtoms; k++) {
-        int atom = body.atoms[k];
-        double m = body.masses[atom];
-        Vector3d ma = m * (point(oldPositions, atom) - oldCenter);
-        J.noalias() += ma * (point(oldPositions, atom) - oldCenter).transpose();
-        target += ma.cross(displacement(atom));
+        const int atom = body.atoms[k];
+        const double m = body.masses[atom];
+        const double* x = oldPositions + 3 * atom;
+        const double a0 = x[0] - o0, a1 = x[1] - o1, a2 = x[2] - o2;
+        const double b0 = m * a0, b1 = m * a1, b2 = m * a2;
+        j00 += b0 * a0; j01 += b0 * a1; j02 += b0 * a2;
+        j11 += b1 * a1; j12 += b1 * a2; j22 += b2 * a2;
+        const Vector3d d = displacement(atom);
+        t0 += b1 * d[2] - b2 * d[1];
+        t1 += b2 * d[0] - b0 * d[2];
+        t2 += b0 * d[1] - b1 * d[0];
     }
+    Matrix3d J;
+    J(0, 0) = j00; J(0, 1) = J(1, 0) = j01; J(0, 2) = J(2, 0) = j02;
+    J(1, 1) = j11; J(1, 2) = J(2, 1) = j12; J(2, 2) = j22;
+    const Vector3d target(t0, t1, t2);
     return solveResetRotationForTorque(J, target);
 }
 
@@ -214,6 +286,8 @@ RotationSolve resetBodyPositions(const BodyView& body, const double* oldPosition
     RotationSolve solve = solveBodyRotation(body, oldPositions, oldCenter, [&](int atom) -> Vector3d {
         return (point(newPositions, atom) - newCenter) - (point(oldPositions, atom) - oldCenter);
     });
+    if (!solve.converged)
+        return solve;
     const Matrix3d& delta = solve.rotationMinusIdentity;
     for (int k = 0; k < body.numAtoms; k++) {
         int atom = body.atoms[k];
@@ -238,13 +312,25 @@ RotationSolve driftAndResetBody(const BodyView& body, double stepSize, const dou
     });
     if (!solve.converged)
         return solve;
-    const Matrix3d& delta = solve.rotationMinusIdentity;
-    const Vector3d shift = stepSize * V;
+    const Matrix3d& D = solve.rotationMinusIdentity;
+    const double c0 = center[0], c1 = center[1], c2 = center[2];
+    const double s0 = stepSize * V[0], s1 = stepSize * V[1], s2 = stepSize * V[2];
+    const double inverseStep = 1.0 / stepSize;
     for (int k = 0; k < body.numAtoms; k++) {
-        int atom = body.atoms[k];
-        Vector3d turn = delta * (point(positions, atom) - center);
-        point(newPositions, atom) = point(positions, atom) + (shift + turn);
-        point(velocities, atom) = V + turn / stepSize;
+        const int atom = body.atoms[k];
+        const double* x = positions + 3 * atom;
+        const double a0 = x[0] - c0, a1 = x[1] - c1, a2 = x[2] - c2;
+        const double r0 = D(0, 0) * a0 + D(0, 1) * a1 + D(0, 2) * a2;   // the turn (P - 1) a
+        const double r1 = D(1, 0) * a0 + D(1, 1) * a1 + D(1, 2) * a2;
+        const double r2 = D(2, 0) * a0 + D(2, 1) * a1 + D(2, 2) * a2;
+        double* y = newPositions + 3 * atom;
+        y[0] = x[0] + (s0 + r0);
+        y[1] = x[1] + (s1 + r1);
+        y[2] = x[2] + (s2 + r2);
+        double* v = velocities + 3 * atom;
+        v[0] = V[0] + r0 * inverseStep;
+        v[1] = V[1] + r1 * inverseStep;
+        v[2] = V[2] + r2 * inverseStep;
     }
     return solve;
 }
@@ -257,35 +343,43 @@ struct RigidMotion {
 };
 
 RigidMotion nearestRigidMotion(const BodyView& body, const double* positions, const double* velocities) {
-    Vector3d massPosition = Vector3d::Zero();
-    Vector3d momentum = Vector3d::Zero();
+    // One pass, about the body's first atom (not the origin, so the sums lose no digits to
+    // a body far from it): M c' = sum m a, p = sum m v, S = sum m a a^T, l = sum m a x v with
+    // a = x - x_first; then J = S - M c' c'^T and L = l - c' x p about the centre.
+    const double* origin = positions + 3 * body.atoms[0];
+    const double o0 = origin[0], o1 = origin[1], o2 = origin[2];
+    double ma0 = 0, ma1 = 0, ma2 = 0, p0 = 0, p1 = 0, p2 = 0, l0 = 0, l1 = 0, l2 = 0;
+    double s00 = 0, s01 = 0, s02 = 0, s11 = 0, s12 = 0, s22 = 0;
     for (int k = 0; k < body.numAtoms; k++) {
-        int atom = body.atoms[k];
-        double m = body.masses[atom];
-        massPosition += m * point(positions, atom);
-        momentum += m * point(velocities, atom);
+        const int atom = body.atoms[k];
+        const double m = body.masses[atom];
+        const double* x = positions + 3 * atom;
+        const double* v = velocities + 3 * atom;
+        const double a0 = x[0] - o0, a1 = x[1] - o1, a2 = x[2] - o2;
+        const double b0 = m * a0, b1 = m * a1, b2 = m * a2;
+        ma0 += b0; ma1 += b1; ma2 += b2;
+        p0 += m * v[0]; p1 += m * v[1]; p2 += m * v[2];
+        s00 += b0 * a0; s01 += b0 * a1; s02 += b0 * a2;
+        s11 += b1 * a1; s12 += b1 * a2; s22 += b2 * a2;
+        l0 += b1 * v[2] - b2 * v[1];
+        l1 += b2 * v[0] - b0 * v[2];
+        l2 += b0 * v[1] - b1 * v[0];
     }
+    const double inverseMass = 1.0 / body.totalMass;
+    const double c0 = ma0 * inverseMass, c1 = ma1 * inverseMass, c2 = ma2 * inverseMass;
     RigidMotion motion;
-    motion.center = massPosition / body.totalMass;
-    motion.velocity = momentum / body.totalMass;
-    // L about the centre; sum m_i a_i = 0, so using v_i instead of v_i - V is exact.
-    Matrix3d J = Matrix3d::Zero();
-    Vector3d L = Vector3d::Zero();
-    for (int k = 0; k < body.numAtoms; k++) {
-        int atom = body.atoms[k];
-        double m = body.masses[atom];
-        Vector3d a = point(positions, atom) - motion.center;
-        J.noalias() += (m * a) * a.transpose();
-        L += m * a.cross(point(velocities, atom));
-    }
+    motion.center = Vector3d(o0 + c0, o1 + c1, o2 + c2);
+    motion.velocity = Vector3d(p0 * inverseMass, p1 * inverseMass, p2 * inverseMass);
+    const double j00 = s00 - ma0 * c0, j01 = s01 - ma0 * c1, j02 = s02 - ma0 * c2;
+    const double j11 = s11 - ma1 * c1, j12 = s12 - ma1 * c2, j22 = s22 - ma2 * c2;
+    const Vector3d L(l0 - (c1 * p2 - c2 * p1), l1 - (c2 * p0 - c0 * p2), l2 - (c0 * p1 - c1 * p0));
+    const double traceJ = j00 + j11 + j22;
     if (body.linear) {
         // I = j (1 - u u^T): no spin about the axis.
         Vector3d u = linearAxis(body, positions, motion.center);
-        double j = J.trace();
-        motion.omega = j > 0 ? Vector3d((L - L.dot(u) * u) / j) : Vector3d::Zero();
+        motion.omega = traceJ > 0 ? Vector3d((L - L.dot(u) * u) / traceJ) : Vector3d::Zero();
     } else {
-        Matrix3d inertia = J.trace() * Matrix3d::Identity() - J;
-        motion.omega = inertia.inverse() * L;
+        motion.omega = solveInertia(j00, j01, j02, j11, j12, j22, L);
     }
     return motion;
 }
@@ -294,9 +388,17 @@ RigidMotion nearestRigidMotion(const BodyView& body, const double* positions, co
 
 void projectBodyVelocities(const BodyView& body, const double* positions, double* velocities) {
     const RigidMotion motion = nearestRigidMotion(body, positions, velocities);
+    const double c0 = motion.center[0], c1 = motion.center[1], c2 = motion.center[2];
+    const double u0 = motion.velocity[0], u1 = motion.velocity[1], u2 = motion.velocity[2];
+    const double w0 = motion.omega[0], w1 = motion.omega[1], w2 = motion.omega[2];
     for (int k = 0; k < body.numAtoms; k++) {
-        int atom = body.atoms[k];
-        point(velocities, atom) = motion.velocity + motion.omega.cross(point(positions, atom) - motion.center);
+        const int atom = body.atoms[k];
+        const double* x = positions + 3 * atom;
+        double* v = velocities + 3 * atom;
+        const double a0 = x[0] - c0, a1 = x[1] - c1, a2 = x[2] - c2;
+        v[0] = u0 + (w1 * a2 - w2 * a1);
+        v[1] = u1 + (w2 * a0 - w0 * a2);
+        v[2] = u2 + (w0 * a1 - w1 * a0);
     }
 }
 

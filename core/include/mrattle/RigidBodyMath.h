@@ -66,9 +66,12 @@ inline int degreesOfFreedom(Shape shape) {
 Eigen::Matrix3d rotationFromVector(const Eigen::Vector3d& d);
 
 /**
- * Solve r(P) = vex(P J - J P^T) - vex(Y - Y^T) = 0 for P in SO(3) by Newton on a left
- * perturbation, starting at P = 1: zero torque of the constraint displacement about the
- * old positions. J: second moment at the old positions; Y = sum m_i y_i a_i^T.
+ * Solve r(P) = vex(P J - J P^T) - vex(Y - Y^T) = 0 for P in SO(3): zero torque of the
+ * constraint displacement about the old positions. J: second moment at the old positions;
+ * Y = sum m_i y_i a_i^T. P is the Cayley rotation of a vector w, on which the condition is
+ * a quadratic solved by Newton from its linearisation (chord steps near the root); a
+ * thermal step takes the linear solve and two more iterations (`iterations` counts all).
+ * If it does not converge, `converged` is false and `rotation` the identity.
  * Not for linear bodies (the Jacobian is singular there; see resetBodyPositions).
  */
 RotationSolve solveResetRotation(const Eigen::Matrix3d& J, const Eigen::Matrix3d& Y);
@@ -83,7 +86,8 @@ RotationSolve solveResetRotationForTorque(const Eigen::Matrix3d& J, const Eigen:
 /**
  * M-RATTLE position reset of one body. oldPositions holds x at the start of the step;
  * newPositions holds the unconstrained drift y* on entry and the reset positions
- * c_new + P (x_i - c_old) on exit (only the body's atoms are touched).
+ * c_new + P (x_i - c_old) on exit (only the body's atoms are touched). If the solve does not
+ * converge, nothing is written.
  */
 RotationSolve resetBodyPositions(const BodyView& body, const double* oldPositions, double* newPositions);
 
