@@ -9,16 +9,22 @@
  *   splitting          RigidSplittingIntegrator (the symplectic splitting baseline)
  *   verlet_ccma        VerletIntegrator with 9 of the 10 pair distances of the
  *                      tetrahedral k = 5 body constrained (OpenMM's own way: CCMA)
+ *   verlet_settle      VerletIntegrator with the 3 distances of the k = 3 body (a rigid
+ *                      water) constrained, which OpenMM integrates with SETTLE
  *
  * The only force is a CustomExternalForce with a zero coefficient on one particle, so the
  * step cost is the integrator's own. Each configuration is timed in `repeats` batches
  * of steps, interleaved across the integrators of one (platform, k, N) so that the ratios
  * of one run see the same machine load; the median per-step time is reported.
  *
+ * --threads takes a list: on the CPU platform each count after the first adds runs of
+ * verlet, mrattle and splitting with that many threads, timed in the same interleaved
+ * batches, and the ratio of their times to the first count's.
+ *
  * Usage: step_cost [--out FILE] [--ratios FILE] [--platforms Reference,CPU]
  *                  [--bodies 100,300,1000,3000] [--atoms 3,5,12,30] [--repeats 7]
- *                  [--batch-seconds 0.05] [--threads 1]
- *                  [--integrators verlet,mrattle,splitting,mrattle_allpairs,verlet_ccma]
+ *                  [--batch-seconds 0.05] [--threads 1[,2]]
+ *                  [--integrators verlet,mrattle,splitting,mrattle_allpairs,verlet_ccma,verlet_settle]
  * Timings go to --out (default stdout) as CSV; the speed-target ratios to --ratios
  * (default stderr) as CSV. Exit status 2 if any run diverged (non-finite state).
  */
@@ -56,7 +62,7 @@ struct Options {
     vector<string> integrators;  // empty: all
     int repeats = 7;
     double batchSeconds = 0.05;
-    int threads = 1;
+    vector<int> threads = {1};
 };
 
 vector<string> split(const string& text) {
@@ -100,12 +106,14 @@ Options parse(int argc, char** argv) {
         else if (flag == "--integrators")
             options.integrators = split(value);
         else if (flag == "--threads")
-            options.threads = std::stoi(value);
+            options.threads = splitInts(value);
         else
             throw std::runtime_error("step_cost: unknown option " + flag);
     }
     if (options.repeats < 1 || options.batchSeconds <= 0)
         throw std::runtime_error("step_cost: --repeats must be >= 1 and --batch-seconds > 0");
+    if (options.threads.empty() || *std::min_element(options.threads.begin(), options.threads.end()) < 1)
+        throw std::runtime_error("step_cost: --threads needs counts >= 1");
     return options;
 }
 
@@ -120,6 +128,7 @@ struct Variant {
 /** One configuration being timed: its own System, Integrator and Context. */
 struct Run {
     string name;
+    int threads = 1;
     int constraintsPerBody = 0;
     std::unique_ptr<System> system;
     std::unique_ptr<Integrator> integrator;
@@ -239,13 +248,12 @@ int main(int argc, char** argv) {
         std::ostream& out = options.out.empty() ? std::cout : outFile;
         std::ostream& ratios = options.ratios.empty() ? std::cerr : ratioFile;
         out << "platform,integrator,atoms_per_body,bodies,atoms,constraints_per_body,steps_per_batch,batches,"
-               "median_us_per_step,min_us_per_step,max_us_per_step,median_ns_per_atom_step,finite\n";
+               "median_us_per_step,min_us_per_step,max_us_per_step,median_ns_per_atom_step,finite,threads\n";
         ratios << "platform,atoms_per_body,bodies,ratio,value,target,met\n";
         for (const string& platformName : options.platforms) {
             Platform& platform = Platform::getPlatformByName(platformName);
-            std::map<string, string> properties;
-            if (platformName == "CPU")
-                properties["Threads"] = std::to_string(options.threads);
+            // Thread counts to run: only the CPU platform has any to choose.
+            const vector<int> threadCounts = platformName == "CPU" ? options.threads : vector<int>{1};
             for (int k : options.atoms) {
                 MRattleBenchmark::Shape shape = MRattleBenchmark::bodyShape(k);
                 vector<Variant> variants = {{"verlet", Pairs::None}, {"mrattle", Pairs::None}, {"splitting", Pairs::None}};
@@ -253,6 +261,8 @@ int main(int argc, char** argv) {
                     variants.push_back({"mrattle_allpairs", Pairs::All});
                     variants.push_back({"verlet_ccma", Pairs::Rigidifying});
                 }
+                if (k == 3)
+                    variants.push_back({"verlet_settle", Pairs::All});
                 if (!options.integrators.empty())
                     variants.erase(std::remove_if(variants.begin(), variants.end(),
                                                   [&](const Variant& v) {
@@ -264,9 +274,17 @@ int main(int argc, char** argv) {
                 for (int numBodies : options.bodies) {
                     vector<Vec3> positions = buildPositions(numBodies, shape);
                     vector<Run> runs;
+                    for (int threads : threadCounts)
                     for (const Variant& variant : variants) {
+                        if (threads != threadCounts[0] && variant.name != "verlet" && variant.name != "mrattle" &&
+                            variant.name != "splitting")
+                            continue;
                         Run run;
                         run.name = variant.name;
+                        run.threads = threads;
+                        std::map<string, string> properties;
+                        if (platformName == "CPU")
+                            properties["Threads"] = std::to_string(threads);
                         run.system = buildSystem(numBodies, shape, variant.pairs, run.constraintsPerBody);
                         if (variant.name.rfind("verlet", 0) == 0) {
                             run.integrator.reset(new VerletIntegrator(0.002));
@@ -300,12 +318,15 @@ int main(int argc, char** argv) {
                     for (int r = 0; r < options.repeats; r++)
                         for (size_t i = 0; i < runs.size(); i++)
                             runs[i].secondsPerStep.push_back(secondsFor(*runs[i].integrator, steps[i]) / steps[i]);
-                    std::map<string, double> medians;
+                    std::map<string, double> medians;       // at the first thread count
+                    std::map<std::pair<string, int>, double> byThreads;
                     const int numAtoms = numBodies * k;
                     for (size_t i = 0; i < runs.size(); i++) {
                         const Run& run = runs[i];
                         double m = median(run.secondsPerStep);
-                        medians[run.name] = m;
+                        if (run.threads == threadCounts[0])
+                            medians[run.name] = m;
+                        byThreads[{run.name, run.threads}] = m;
                         auto range = std::minmax_element(run.secondsPerStep.begin(), run.secondsPerStep.end());
                         // A diverged run (NaN) is timed but flagged: its time means nothing.
                         State state = run.context->getState(State::Positions | State::Energy, false, 1 << 0);
@@ -316,23 +337,39 @@ int main(int argc, char** argv) {
                         out << platformName << ',' << run.name << ',' << k << ',' << numBodies << ',' << numAtoms << ','
                             << run.constraintsPerBody << ',' << steps[i] << ',' << options.repeats << ',' << m * 1e6
                             << ',' << *range.first * 1e6 << ',' << *range.second * 1e6 << ','
-                            << m * 1e9 / numAtoms << ',' << (finite ? "yes" : "no") << '\n';
+                            << m * 1e9 / numAtoms << ',' << (finite ? "yes" : "no") << ',' << run.threads << '\n';
                     }
                     out.flush();
-                    auto report = [&](const string& name, double value, const string& target, bool met) {
+                    // met: 1 yes, 0 no, -1 no target for this configuration.
+                    auto report = [&](const string& name, double value, const string& target, int met) {
                         if (!std::isfinite(value) || value == 0)
                             return;  // an integrator of the ratio was not run
                         ratios << platformName << ',' << k << ',' << numBodies << ',' << name << ',' << value << ','
-                               << target << ',' << (met ? "yes" : "no") << '\n';
+                               << target << ',' << (met < 0 ? "-" : met ? "yes" : "no") << '\n';
                     };
                     double mr = medians["mrattle"];
-                    report("mrattle/verlet", mr / medians["verlet"], "<=2.0", mr / medians["verlet"] <= 2.0);
+                    report("mrattle/verlet", mr / medians["verlet"], "<=1.5", mr / medians["verlet"] <= 1.5);
                     report("mrattle/splitting", mr / medians["splitting"], "<=1.0", mr / medians["splitting"] <= 1.0);
                     if (k == 5) {
                         double ccma = medians["verlet_ccma"] / mr, pairs = medians["mrattle_allpairs"] / mr;
-                        report("verlet_ccma/mrattle", ccma, ">=20", ccma >= 20);
+                        report("verlet_ccma/mrattle", ccma, ">=2", ccma >= 2);
                         report("mrattle_allpairs/mrattle", pairs, "<=1.10", pairs <= 1.10);
                     }
+                    if (k == 3) {
+                        double settle = mr / medians["verlet_settle"];
+                        report("mrattle/verlet_settle", settle, "<=1.0", settle <= 1.0);
+                    }
+                    // Speed-up from threads: time at the first count over time at each other one.
+                    for (size_t t = 1; t < threadCounts.size(); t++)
+                        for (const string& name : {"mrattle", "splitting"}) {
+                            double speedup = byThreads[{name, threadCounts[0]}] / byThreads[{name, threadCounts[t]}];
+                            string label = name + " threads " + std::to_string(threadCounts[0]) + "/" +
+                                           std::to_string(threadCounts[t]);
+                            if (numBodies >= 3000 && name == "mrattle")
+                                report(label, speedup, ">=1.7", speedup >= 1.7);
+                            else
+                                report(label, speedup, "-", -1);
+                        }
                     ratios.flush();
                 }
             }

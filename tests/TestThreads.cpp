@@ -1,9 +1,10 @@
 /*
- * On the CPU platform the per-body work is split over the platform's Threads. Each body is
- * computed the same way whichever thread takes it: with no forces (so OpenMM's own
- * threaded force sums play no part) the trajectory is bit for bit the same with 1 and 2
- * threads, for every integrator there.
+ * On the CPU platform the per-body and per-atom work is split over the platform's Threads.
+ * Each body and atom is computed the same way whichever thread takes it: with only a
+ * per-particle external force (so OpenMM's own threaded force sums play no part) the
+ * trajectory is bit for bit the same with 1 and 2 threads, for every integrator there.
  */
+#include "openmm/CustomExternalForce.h"
 #include "MRattleLangevinIntegrator.h"
 #include "TestSupport.h"
 #include <gtest/gtest.h>
@@ -16,18 +17,22 @@ using std::string;
 using std::vector;
 
 TEST(Threads, BodiesGiveTheSameTrajectoryWithOneAndTwoThreads) {
-    // 512 free tetrahedral bodies (more than the 256 below which the work stays on one thread).
+    // 1024 tetrahedral bodies, 5120 atoms: more than the 256 bodies and 4096 atoms below
+    // which the work stays on one thread. A harmonic well makes the kicks matter.
     Molecule m = tetrahedral();
     System system;
     vector<Vec3> positions, velocities;
     vector<vector<int> > bodies;
-    for (int b = 0; b < 512; b++) {
+    CustomExternalForce* well = new CustomExternalForce("0.5*(x^2+y^2+z^2)");
+    system.addForce(well);
+    for (int b = 0; b < 1024; b++) {
         vector<Vec3> rotation = randomRotation(100 + b);
         vector<int> body;
-        const Vec3 center(0.6 * (b % 8), 0.6 * ((b / 8) % 8), 0.6 * (b / 64));
+        const Vec3 center(0.6 * (b % 8), 0.6 * ((b / 8) % 8), 0.6 * (b / 64) - 4.0);
         const Vec3 spin(0.3 * std::sin(b), 2.0 * std::cos(0.7 * b), 1.0);
         for (size_t i = 0; i < m.sites.size(); i++) {
             body.push_back(system.addParticle(m.masses[i]));
+            well->addParticle(body.back());
             Vec3 a = rotate(rotation, m.sites[i]);
             positions.push_back(center + a);
             velocities.push_back(Vec3(0.1, -0.2, 0.05) + spin.cross(a));

@@ -53,6 +53,12 @@ public:
      * (INT_MAX if none), so which body is reported does not depend on the threads either.
      */
     int forEachBody(const std::function<bool(int)>& work);
+    /**
+     * Call work(begin, end) on contiguous ranges covering every particle, one per thread
+     * when there are enough particles to pay for them: for per-atom loops (kicks, drifts)
+     * whose atoms are independent, so results do not depend on the threads.
+     */
+    void forEachParticleRange(const std::function<void(int, int)>& work);
 
     /** Classify each body's shape (linear or not) from the given positions. */
     void updateShapes(const std::vector<OpenMM::Vec3>& positions);

@@ -15,8 +15,10 @@ void ReferenceIntegrateMRattleStepKernel::integratePositions(ContextImpl& contex
     const double h = integrator.getStepSize();
     // Half kick, drift and reset into buffers: the Context is only written once every
     // body's reset has succeeded, so a failed step leaves it as it was.
-    for (size_t i = 0; i < x.size(); i++)
-        kicked[i] = (inverseMass[i] != 0 ? v[i] + f[i] * (0.5 * h * inverseMass[i]) : v[i]);
+    dynamics->forEachParticleRange([&](int begin, int end) {
+        for (int i = begin; i < end; i++)
+            kicked[i] = (inverseMass[i] != 0 ? v[i] + f[i] * (0.5 * h * inverseMass[i]) : v[i]);
+    });
     try {
         dynamics->driftAndReset(x, kicked, h, integrator.getConstraintTolerance(), newPositions, newVelocities);
     } catch (const OpenMMException& e) {

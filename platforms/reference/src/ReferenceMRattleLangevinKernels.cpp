@@ -25,8 +25,10 @@ void ReferenceIntegrateMRattleLangevinStepKernel::integratePositions(ContextImpl
     const int n = x.size();
     dynamics->seedRandom(integrator.getRandomNumberSeed());
     // A full kick (leapfrog) and RATTLE's velocity step at the current positions.
-    for (int i = 0; i < n; i++)
-        kicked[i] = (inverseMass[i] != 0 ? v[i] + f[i] * (h * inverseMass[i]) : v[i]);
+    dynamics->forEachParticleRange([&](int begin, int end) {
+        for (int i = begin; i < end; i++)
+            kicked[i] = (inverseMass[i] != 0 ? v[i] + f[i] * (h * inverseMass[i]) : v[i]);
+    });
     dynamics->projectVelocities(x, kicked, tolerance);
     try {
         if (integrator.getFriction() == 0) {

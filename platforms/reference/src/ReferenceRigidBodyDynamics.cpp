@@ -110,6 +110,20 @@ int ReferenceRigidBodyDynamics::forEachBody(const std::function<bool(int)>& work
     return *std::min_element(firstFailure.begin(), firstFailure.end());
 }
 
+void ReferenceRigidBodyDynamics::forEachParticleRange(const std::function<void(int, int)>& work) {
+    const int numParticles = inverseMass.size();
+    // A particle costs nanoseconds: only large systems pay for a parallel region.
+    if (!threads || numParticles < 4096) {
+        work(0, numParticles);
+        return;
+    }
+    const int numThreads = threads->getNumThreads();
+    threads->execute([&](ThreadPool&, int thread) {
+        work((long long) numParticles * thread / numThreads, (long long) numParticles * (thread + 1) / numThreads);
+    });
+    threads->waitForThreads();
+}
+
 void ReferenceRigidBodyDynamics::updateShapes(const vector<Vec3>& positions) {
     const double* data = reinterpret_cast<const double*>(positions.data());
     for (int b = 0; b < bodies.getNumBodies(); b++) {
@@ -135,11 +149,12 @@ void ReferenceRigidBodyDynamics::seedRandom(int seed) {
 
 void ReferenceRigidBodyDynamics::driftAndReset(vector<Vec3>& x, const vector<Vec3>& v, double h, double tolerance,
                                                vector<Vec3>& newPositions, vector<Vec3>& newVelocities) {
-    const int n = x.size();
-    for (int i = 0; i < n; i++) {
-        newVelocities[i] = v[i];
-        newPositions[i] = (inverseMass[i] != 0 ? x[i] + v[i] * h : x[i]);
-    }
+    forEachParticleRange([&](int begin, int end) {
+        for (int i = begin; i < end; i++) {
+            newVelocities[i] = v[i];
+            newPositions[i] = (inverseMass[i] != 0 ? x[i] + v[i] * h : x[i]);
+        }
+    });
     // Free particles: RATTLE for their constraints, velocities from the displacement.
     constrainFreePositions(x, newPositions, tolerance);
     const double inverseStep = 1.0 / h;
@@ -197,9 +212,11 @@ void ReferenceRigidBodyDynamics::kickAndProject(ContextImpl& context, double ste
     vector<Vec3>& v = velocities(context);
     const vector<Vec3>& f = forces(context);
     const double halfStep = 0.5 * stepSize;
-    for (size_t i = 0; i < v.size(); i++)
-        if (inverseMass[i] != 0)
-            v[i] += f[i] * (halfStep * inverseMass[i]);
+    forEachParticleRange([&](int begin, int end) {
+        for (int i = begin; i < end; i++)
+            if (inverseMass[i] != 0)
+                v[i] += f[i] * (halfStep * inverseMass[i]);
+    });
     projectVelocities(x, v, tolerance);
     advanceClock(context, stepSize);
 }
