@@ -9,11 +9,13 @@
  * before the failed step until the host reports the failure.
  */
 
+// CHORD_CONVERGED: the rotation solve stops when its error estimate (step^2 / previous
+// step) is below this fraction of the rotation: round-off of the precision in use.
 #ifdef USE_DOUBLE_MIXED
-#define CONVERGED_SQUARED 1e-14
+#define CHORD_CONVERGED 1e-15
 #define RIGID_TOLERANCE 1e-12
 #else
-#define CONVERGED_SQUARED 1e-10
+#define CHORD_CONVERGED 1e-6
 #define RIGID_TOLERANCE 1e-5
 #endif
 #define MAX_ROTATION_ITERATIONS 50
@@ -79,62 +81,84 @@ DEVICE bool solve3(Matrix3 A, mixed3 b, mixed3* x) {
     return true;
 }
 
-/** cay(d) - 1 = 2 ([w]x + [w]x^2) / (1 + |w|^2), w = d/2 */
-DEVICE Matrix3 cayleyMinusIdentity(mixed3 d) {
-    mixed3 w = make_mixed3(0.5f*d.x, 0.5f*d.y, 0.5f*d.z);
-    Matrix3 W;
-    W.m00 = 0; W.m01 = -w.z; W.m02 = w.y;
-    W.m10 = w.z; W.m11 = 0; W.m12 = -w.x;
-    W.m20 = -w.y; W.m21 = w.x; W.m22 = 0;
-    Matrix3 W2 = multiply(W, W);
-    mixed s = 2/(1 + w.x*w.x + w.y*w.y + w.z*w.z);
-    Matrix3 E;
-    E.m00 = s*(W.m00+W2.m00); E.m01 = s*(W.m01+W2.m01); E.m02 = s*(W.m02+W2.m02);
-    E.m10 = s*(W.m10+W2.m10); E.m11 = s*(W.m11+W2.m11); E.m12 = s*(W.m12+W2.m12);
-    E.m20 = s*(W.m20+W2.m20); E.m21 = s*(W.m21+W2.m21); E.m22 = s*(W.m22+W2.m22);
-    return E;
-}
-
-DEVICE mixed squaredNorm(Matrix3 A) {
-    return A.m00*A.m00 + A.m01*A.m01 + A.m02*A.m02 + A.m10*A.m10 + A.m11*A.m11 + A.m12*A.m12 +
-           A.m20*A.m20 + A.m21*A.m21 + A.m22*A.m22;
+/** A^-1 by the adjugate; returns false if A is singular. */
+DEVICE bool inverse3(Matrix3 A, Matrix3* inverse) {
+    Matrix3 C;
+    C.m00 = A.m11*A.m22 - A.m12*A.m21; C.m01 = A.m02*A.m21 - A.m01*A.m22; C.m02 = A.m01*A.m12 - A.m02*A.m11;
+    C.m10 = A.m12*A.m20 - A.m10*A.m22; C.m11 = A.m00*A.m22 - A.m02*A.m20; C.m12 = A.m02*A.m10 - A.m00*A.m12;
+    C.m20 = A.m10*A.m21 - A.m11*A.m20; C.m21 = A.m01*A.m20 - A.m00*A.m21; C.m22 = A.m00*A.m11 - A.m01*A.m10;
+    mixed det = A.m00*C.m00 + A.m01*C.m10 + A.m02*C.m20;
+    if (det == 0)
+        return false;
+    mixed inv = 1/det;
+    C.m00 *= inv; C.m01 *= inv; C.m02 *= inv;
+    C.m10 *= inv; C.m11 *= inv; C.m12 *= inv;
+    C.m20 *= inv; C.m21 *= inv; C.m22 *= inv;
+    *inverse = C;
+    return true;
 }
 
 /**
- * Newton on SO(3) for vex(P J - J P^T) = target, carrying P - 1 (as the core does):
- * returns true and P - 1 in *delta if it converged.
+ * The reset rotation, as the core solves it (RigidBodyMath::solveResetRotationForTorque):
+ * P is the Cayley rotation of w, P - 1 = c ([w]x + [w]x^2) with c = 2 / (1 + |w|^2), and the
+ * condition vex(P J - J P^T) = target is the quadratic
+ * F(w) = I w + (J w) x w - (1 + |w|^2) target / 2 = 0 with I = tr(J) - J. Newton from the
+ * linearised answer I^-1 target / 2, keeping the Jacobian (chord steps) once the correction
+ * is below 1e-3 of w. Returns true and P - 1 in *delta if it converged.
  */
 DEVICE bool solveRotation(Matrix3 J, mixed3 target, Matrix3* delta) {
-    Matrix3 D = zeroMatrix();
-    for (int iteration = 0; iteration < MAX_ROTATION_ITERATIONS; iteration++) {
-        Matrix3 DJ = multiply(D, J);
-        mixed3 r = make_mixed3(DJ.m21 - DJ.m12 - target.x, DJ.m02 - DJ.m20 - target.y, DJ.m10 - DJ.m01 - target.z);
-        if (r.x == 0 && r.y == 0 && r.z == 0) {
-            *delta = D;
-            return true;
+    const mixed traceJ = J.m00 + J.m11 + J.m22;
+    Matrix3 I;
+    I.m00 = traceJ - J.m00; I.m01 = -J.m01; I.m02 = -J.m02;
+    I.m10 = -J.m10; I.m11 = traceJ - J.m11; I.m12 = -J.m12;
+    I.m20 = -J.m20; I.m21 = -J.m21; I.m22 = traceJ - J.m22;
+    const mixed3 t = make_mixed3(0.5f*target.x, 0.5f*target.y, 0.5f*target.z);
+    mixed3 w;
+    if (!solve3(I, t, &w))
+        return false;
+    Matrix3 inverseJacobian;
+    bool newJacobian = true, converged = false;
+    mixed previousStep = sqrt(w.x*w.x + w.y*w.y + w.z*w.z);
+    for (int iteration = 1; iteration < MAX_ROTATION_ITERATIONS && !converged; iteration++) {
+        const mixed3 Jw = apply(J, w);
+        const mixed scale = 1 + w.x*w.x + w.y*w.y + w.z*w.z;
+        const mixed3 F = traceJ*w - Jw + cross(Jw, w) - scale*t;
+        if (newJacobian) {
+            // G = I - [w]x J + [J w]x - 2 t w^T
+            Matrix3 G;
+            G.m00 = I.m00 - (w.y*J.m20 - w.z*J.m10) - 2*t.x*w.x;
+            G.m01 = I.m01 - (w.y*J.m21 - w.z*J.m11) - Jw.z - 2*t.x*w.y;
+            G.m02 = I.m02 - (w.y*J.m22 - w.z*J.m12) + Jw.y - 2*t.x*w.z;
+            G.m10 = I.m10 - (w.z*J.m00 - w.x*J.m20) + Jw.z - 2*t.y*w.x;
+            G.m11 = I.m11 - (w.z*J.m01 - w.x*J.m21) - 2*t.y*w.y;
+            G.m12 = I.m12 - (w.z*J.m02 - w.x*J.m22) - Jw.x - 2*t.y*w.z;
+            G.m20 = I.m20 - (w.x*J.m10 - w.y*J.m00) - Jw.y - 2*t.z*w.x;
+            G.m21 = I.m21 - (w.x*J.m11 - w.y*J.m01) + Jw.x - 2*t.z*w.y;
+            G.m22 = I.m22 - (w.x*J.m12 - w.y*J.m02) - 2*t.z*w.z;
+            if (!inverse3(G, &inverseJacobian))
+                return false;
         }
-        Matrix3 K;  // tr(PJ) 1 - PJ, PJ = J + DJ
-        mixed trace = J.m00 + DJ.m00 + J.m11 + DJ.m11 + J.m22 + DJ.m22;
-        K.m00 = trace - (J.m00+DJ.m00); K.m01 = -(J.m01+DJ.m01); K.m02 = -(J.m02+DJ.m02);
-        K.m10 = -(J.m10+DJ.m10); K.m11 = trace - (J.m11+DJ.m11); K.m12 = -(J.m12+DJ.m12);
-        K.m20 = -(J.m20+DJ.m20); K.m21 = -(J.m21+DJ.m21); K.m22 = trace - (J.m22+DJ.m22);
-        mixed3 d;
-        if (!solve3(K, make_mixed3(-r.x, -r.y, -r.z), &d))
-            return false;
-        mixed dd = d.x*d.x + d.y*d.y + d.z*d.z;
-        if (!(dd == dd) || dd > 1e30f)
+        const mixed3 step = apply(inverseJacobian, F);
+        w -= step;
+        const mixed stepSize = sqrt(step.x*step.x + step.y*step.y + step.z*step.z);
+        const mixed size = sqrt(w.x*w.x + w.y*w.y + w.z*w.z);
+        if (!(size == size) || size > 1e30f)
             return false;  // not finite
-        Matrix3 E = cayleyMinusIdentity(d);
-        Matrix3 ED = multiply(E, D);
-        D.m00 += E.m00+ED.m00; D.m01 += E.m01+ED.m01; D.m02 += E.m02+ED.m02;
-        D.m10 += E.m10+ED.m10; D.m11 += E.m11+ED.m11; D.m12 += E.m12+ED.m12;
-        D.m20 += E.m20+ED.m20; D.m21 += E.m21+ED.m21; D.m22 += E.m22+ED.m22;
-        if (dd <= CONVERGED_SQUARED*squaredNorm(D)) {
-            *delta = D;
-            return true;
-        }
+        // The error left is about the step times the rate at which steps shrink.
+        converged = (stepSize == 0 || stepSize*stepSize <= CHORD_CONVERGED*size*previousStep);
+        newJacobian = !(stepSize <= 1e-3f*size);
+        previousStep = stepSize;
     }
-    return false;
+    if (!converged)
+        return false;
+    const mixed w2 = w.x*w.x + w.y*w.y + w.z*w.z, c = 2/(1 + w2);
+    Matrix3 D;
+    D.m00 = c*(w.x*w.x - w2); D.m11 = c*(w.y*w.y - w2); D.m22 = c*(w.z*w.z - w2);
+    D.m01 = c*(w.x*w.y - w.z); D.m10 = c*(w.x*w.y + w.z);
+    D.m02 = c*(w.x*w.z + w.y); D.m20 = c*(w.x*w.z - w.y);
+    D.m12 = c*(w.y*w.z - w.x); D.m21 = c*(w.y*w.z + w.x);
+    *delta = D;
+    return true;
 }
 
 /** Every work item of one launch that fails writes the same value, so no atomic is needed. */
