@@ -6,11 +6,13 @@ import subprocess
 import numpy as np
 
 
-def run_step_cost(binary, platforms, bodies, atoms, repeats, batch_seconds, log):
-    """Run step_cost; returns (timing rows, ratio rows) parsed from its CSV output."""
+def run_step_cost(binary, platforms, bodies, atoms, repeats, batch_seconds, log, threads=(1,)):
+    """Run step_cost; returns (timing rows, ratio rows) parsed from its CSV output.
+    threads: CPU thread counts (the first for every integrator, the others for verlet, mrattle, splitting)."""
     cmd = [binary, "--platforms", ",".join(platforms), "--bodies", ",".join(map(str, bodies)),
            "--atoms", ",".join(map(str, atoms)), "--repeats", str(repeats),
-           "--batch-seconds", str(batch_seconds), "--out", "/dev/stdout", "--ratios", "/dev/stderr"]
+           "--batch-seconds", str(batch_seconds), "--threads", ",".join(map(str, threads)),
+           "--out", "/dev/stdout", "--ratios", "/dev/stderr"]
     log("  " + " ".join(cmd))
     done = subprocess.run(cmd, check=True, capture_output=True, text=True)
     timings = list(csv.DictReader(io.StringIO(done.stdout)))
@@ -37,9 +39,11 @@ def plot(timings, path):
     atoms_for_n = 5 if any(int(r["atoms_per_body"]) == 5 for r in timings) else int(timings[0]["atoms_per_body"])
     for ax, platform in zip(axes[0], platforms):
         rows = [r for r in timings if r["platform"] == platform and int(r["atoms_per_body"]) == atoms_for_n]
-        for integrator in sorted({r["integrator"] for r in rows}):
-            pts = sorted((int(r["bodies"]), float(r[key_time])) for r in rows if r["integrator"] == integrator)
-            ax.loglog([p[0] for p in pts], [p[1] for p in pts], "o-", label=integrator)
+        for integrator, threads in sorted({(r["integrator"], r.get("threads", "1")) for r in rows}):
+            pts = sorted((int(r["bodies"]), float(r[key_time])) for r in rows
+                         if r["integrator"] == integrator and r.get("threads", "1") == threads)
+            label = integrator if threads == "1" else "%s (%s threads)" % (integrator, threads)
+            ax.loglog([p[0] for p in pts], [p[1] for p in pts], "o--" if threads != "1" else "o-", label=label)
         ax.set_xlabel("number of rigid bodies (k = %d atoms each)" % atoms_for_n)
         ax.set_ylabel("time per step (microseconds, median)")
         ax.set_title(platform)
@@ -99,4 +103,56 @@ def profile(step_cost, atoms, log):
             rows.append({"share_percent": float(parts[0][:-1]), "function": symbol})
     for r in rows[:6]:
         log("  %5.1f%%  %s" % (r["share_percent"], r["function"]))
+    return rows
+
+
+def _range_text(values, fmt="%.2f"):
+    values = sorted(values)
+    if not values:
+        return "not run"
+    return (fmt % values[0]) if len(values) == 1 else (fmt + " to " + fmt) % (values[0], values[-1])
+
+
+def target_rows(ratios, micro, villin_ratio=None):
+    """Issue 11's speed targets against this run's numbers: one row (target, measured, met) each.
+
+    ratios: step_cost's ratio rows; micro: RigidBodyMathBenchmarks rows; villin_ratio: M-RATTLE's
+    ns/day over Verlet's on the villin headpiece (None if not run)."""
+    rows = []
+
+    def add(target, values, met, fmt="%.2f", where=""):
+        measured = _range_text(values, fmt) + (where if values else "")
+        rows.append({"target": target, "measured": measured,
+                     "met": "-" if not values else ("%d of %d" % (sum(met), len(met)) if len(met) > 1 else
+                                                    ("yes" if met[0] else "no"))})
+
+    def ratio_values(name, platform=None, atoms=None, min_bodies=1000):
+        chosen = [r for r in ratios if r["ratio"] == name and int(r["bodies"]) >= min_bodies and
+                  (platform is None or r["platform"] == platform) and
+                  (atoms is None or int(r["atoms_per_body"]) == atoms)]
+        return [float(r["value"]) for r in chosen], [r["met"] == "yes" for r in chosen]
+
+    def micro_values(name, atoms=None):
+        return [r["ns_per_body"] for r in micro if r["benchmark"] == name and
+                (atoms is None or r["atoms_per_body"] == atoms)]
+
+    solve = micro_values("SolveResetRotation")
+    add("rotation solve <= 80 ns per body (k = 3 to 30)", solve, [max(solve) <= 80] if solve else [], "%.0f", " ns")
+    projection = micro_values("ProjectBodyVelocities", 5)
+    add("velocity projection <= 40 ns per 5-atom body", projection, [v <= 40 for v in projection], "%.0f", " ns")
+    for platform in ("Reference", "CPU"):
+        values, met = ratio_values("mrattle/verlet", platform)
+        add("M-RATTLE <= 1.5x VerletIntegrator, %s, 1000 and 3000 bodies of 3-30 atoms" % platform, values, met)
+    for platform in ("Reference", "CPU"):
+        values, met = ratio_values("mrattle/verlet_settle", platform, 3)
+        add("rigid water: M-RATTLE <= 1.0x Verlet + SETTLE, %s" % platform, values, met)
+    values, met = ratio_values("verlet_ccma/mrattle", None, 5)
+    add("5-atom bodies: Verlet + CCMA >= 2x M-RATTLE's time", values, met)
+    values, met = ratio_values("mrattle threads 1/2", "CPU", None, 3000)
+    add("CPU Threads=2 >= 1.7x faster than Threads=1, 3000 bodies", values, met)
+    if villin_ratio is not None:
+        add("villin in water, CPU, 2 threads: ns/day >= Verlet + SETTLE + CCMA", [villin_ratio],
+            [villin_ratio >= 1.0], "%.3f", " x Verlet's ns/day")
+    values, met = ratio_values("mrattle/splitting")
+    add("M-RATTLE no slower than the splitting method", values, met)
     return rows
