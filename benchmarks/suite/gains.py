@@ -28,14 +28,19 @@ def flexible_with_hbonds(system):
     return flexible
 
 
-def equilibrate(model, picoseconds, log):
-    """Rigid M-RATTLE with an Andersen thermostat at 300 K from the lattice start."""
+def equilibrate(model, picoseconds, log, temperature=300.0, seed=1, threads=None, thermostat_seed=0):
+    """Rigid M-RATTLE with an Andersen thermostat at `temperature` (K) from the lattice start:
+    200 steps of 1 fs, then `picoseconds` at 4 fs. seed: the starting velocities' random seed;
+    thermostat_seed: the thermostat's (0: OpenMM picks a new one each time, so runs differ)."""
     system = _copy(model.system)
-    system.addForce(openmm.AndersenThermostat(300 * unit.kelvin, 5 / unit.picosecond))
+    thermostat = openmm.AndersenThermostat(temperature * unit.kelvin, 5 / unit.picosecond)
+    thermostat.setRandomNumberSeed(thermostat_seed)
+    system.addForce(thermostat)
     integrator = mrattle.MRattleIntegrator(1 * unit.femtosecond)
-    context = openmm.Context(system, integrator, openmm.Platform.getPlatformByName("CPU"))
+    plat, props = common.platform("CPU", threads)
+    context = openmm.Context(system, integrator, plat, props)
     context.setPositions(model.positions)
-    context.setVelocitiesToTemperature(300 * unit.kelvin, 1)
+    context.setVelocitiesToTemperature(temperature * unit.kelvin, seed)
     integrator.step(200)
     integrator.setStepSize(4 * unit.femtosecond)
     integrator.step(int(picoseconds / 0.004))

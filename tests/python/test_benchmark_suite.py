@@ -126,3 +126,77 @@ def test_a_rigid_step_counts_as_stable_only_within_its_error_bars():
     # 6 fs has the smaller drift but error bars too wide to show it meets 0.01 per DOF; 8 fs has none.
     assert gains.largest_stable(rows, 0.01)["step_fs"] == 4
     assert gains.largest_stable(rows, 0.001) is None
+
+
+def test_quick_long_drift_gives_finite_drifts_with_error_bars(tmp_path):
+    subprocess.run([sys.executable, os.path.join(ROOT, "benchmarks", "run_suite.py"), "--quick", "--build", BUILD,
+                    "--out", str(tmp_path), "--only", "drift"], check=True, timeout=300)
+    text = (tmp_path / "results.md").read_text()
+    assert "## Long-run energy drift" in text and "consistent with zero within 2 standard errors" in text
+    assert (tmp_path / "results" / "long_drift.png").stat().st_size > 1000
+    rows = read(tmp_path / "results" / "long_drift.csv")
+    assert {r["method"] for r in rows} == {"M-RATTLE", "splitting"}
+    import math
+    for r in rows:
+        assert r["failure"] == ""
+        assert math.isfinite(float(r["drift_per_ns"])) and float(r["drift_error_per_ns"]) > 0, r
+        assert float(r["rigidity_nm"]) < 1e-10
+        assert 100 < float(r["temperature_K"]) < 400
+
+
+def test_departed_molecules_are_counted_around_the_cluster_that_remains():
+    sys.path.insert(0, os.path.join(ROOT, "benchmarks"))
+    import numpy as np
+    from suite import long_drift
+    grid = np.array([(i, j, k) for i in range(3) for j in range(3) for k in range(3)], float) * 0.5
+    grid -= grid.mean(0)
+    assert long_drift.departed(grid, 2.0)[0] == 0
+    # One molecule 100 nm away drags the plain centre of mass 3.7 nm off the other 26: counting
+    # around that centre would call all 27 departed. Around the cluster that remains, just one.
+    far = grid.copy()
+    far[0] = [100.0, 0.0, 0.0]
+    gone, farthest = long_drift.departed(far, 2.0)
+    assert gone == 1 and farthest < 1.0
+    far[26] = [0.0, -30.0, 5.0]
+    assert long_drift.departed(far, 2.0)[0] == 2
+
+
+def test_net_motion_removal_zeroes_momentum_and_angular_momentum_and_keeps_bodies_rigid():
+    sys.path.insert(0, os.path.join(ROOT, "benchmarks"))
+    import numpy as np
+    from suite import long_drift
+    rng = np.random.default_rng(3)
+    x = rng.normal(size=(12, 3))
+    m = rng.uniform(1.0, 16.0, size=12)
+    # Two rigid bodies of 6 atoms each: v = V + w x r within each.
+    v = np.concatenate([rng.normal(size=3) + np.cross(rng.normal(size=3), x[b] - x[b].mean(0))
+                        for b in (slice(0, 6), slice(6, 12))])
+    u = long_drift.without_net_motion(x, v, m)
+    c = m.dot(x) / m.sum()
+    assert np.abs(m.dot(u)).max() < 1e-12
+    assert np.abs((m[:, None] * np.cross(x - c, u)).sum(0)).max() < 1e-12
+    # Rigid: the rate of change of every intra-body distance is still zero.
+    for b in (range(0, 6), range(6, 12)):
+        for i in b:
+            for j in b:
+                assert abs(np.dot(x[i] - x[j], u[i] - u[j])) < 1e-12
+
+
+def test_drift_verdicts_follow_the_error_bars():
+    sys.path.insert(0, os.path.join(ROOT, "benchmarks"))
+    import run_suite
+    from suite import long_drift
+    assert long_drift.verdict(0.03, 0.02) == "consistent with zero within 2 SE"
+    assert long_drift.verdict(-0.05, 0.02).startswith("nonzero (loss")
+    assert long_drift.verdict(float("nan"), 0.02) == "no fit"
+
+    def row(method, drift, error, seed=1):
+        return {"method": method, "step_fs": 4.0, "seed": seed, "drift_per_ns": drift, "drift_error_per_ns": error,
+                "departed": 0}
+    small = [row("M-RATTLE", 0.004, 0.005), row("splitting", -0.002, 0.004)]
+    text = "".join(run_suite.long_drift_reading(small, long_drift.summary(small)))
+    assert "2 of 2 runs have a drift consistent with zero" in text and "agree with the independent" in text
+    large = [row("M-RATTLE", 0.004, 0.02), row("splitting", 0.1, 0.01)]
+    text = "".join(run_suite.long_drift_reading(large, long_drift.summary(large)))
+    assert "1 of 2 runs" in text and "cannot confirm" in text and "in 1 of 1 cases" in text
+    assert "splitting 4 fs seed 1 is 10.0 SE from zero" in text and "exceeds it by more than 2 SE" in text

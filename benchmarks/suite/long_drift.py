@@ -1,0 +1,178 @@
+"""Long-run energy drift: NVE of the 27-benzene cluster from equilibrated starts, both methods.
+
+The drift column of the accuracy section comes from 4 ps runs that start on a lattice still
+relaxing; here each start is first equilibrated with a thermostat (the same equilibration
+as the liquid's, gains.equilibrate), then M-RATTLE and the splitting method each run long
+NVE from that one state, and the drift is the least-squares slope of the total energy with
+its standard error (stats.drift_with_error).
+"""
+import numpy as np
+from openmm import unit
+
+import mrattle
+from . import common, gains, stats
+
+KB = 0.00831446261815324  # kJ/mol/K
+METHODS = ("M-RATTLE", "splitting")
+
+
+def equilibrated_start(temperature, seed, equilibrate_ps, log):
+    """The cluster's lattice start (orientations and velocities from `seed`), equilibrated with
+    M-RATTLE and an Andersen thermostat at `temperature` (K); returns (system, positions, velocities, bodies)."""
+    model = mrattle.models.benzeneCluster(temperature=temperature * unit.kelvin, seed=seed)
+    state = gains.equilibrate(model, equilibrate_ps, log, temperature=temperature, seed=seed, threads=1,
+                              thermostat_seed=seed)
+    x = np.array(state.getPositions(asNumpy=True).value_in_unit(unit.nanometer))
+    v = np.array(state.getVelocities(asNumpy=True).value_in_unit(unit.nanometer / unit.picosecond))
+    bodies = [list(range(12 * m, 12 * m + 12)) for m in range(model.system.getNumParticles() // 12)]
+    masses = np.array([model.system.getParticleMass(i).value_in_unit(unit.dalton)
+                       for i in range(model.system.getNumParticles())])
+    return model.system, x, without_net_motion(x, v, masses), bodies
+
+
+def without_net_motion(x, v, masses):
+    """Velocities less the whole system's centre-of-mass velocity and rigid rotation (zero total
+    momentum and angular momentum; the thermostat leaves both random). Both removed motions are
+    rigid, so every body stays rigid."""
+    mass = masses.sum()
+    c = masses.dot(x) / mass
+    v = v - masses.dot(v) / mass
+    r = x - c
+    L = (masses[:, None] * np.cross(r, v)).sum(0)
+    inertia = (masses * (r ** 2).sum(1)).sum() * np.eye(3) - np.einsum("i,ij,ik->jk", masses, r, r)
+    return v - np.cross(np.linalg.solve(inertia, L), r)
+
+
+def molecule_centres(positions, system, bodies):
+    """Centre of mass of each body (nm)."""
+    masses = np.array([system.getParticleMass(i).value_in_unit(unit.dalton) for i in range(system.getNumParticles())])
+    return np.array([masses[b].dot(positions[b]) / masses[b].sum() for b in bodies])
+
+
+def departed(centres, radius):
+    """How many molecules have left the cluster: centres farther than `radius` (nm) from the centre
+    of the molecules that remain. The centre starts at the centres' component-wise median (which a
+    few far-away molecules cannot drag off the cluster, as they drag the mean) and is then the mean
+    of the molecules within `radius` of it, until that set settles.
+    Returns (count, distance of the farthest remaining molecule from that centre)."""
+    centres = np.asarray(centres, float)
+    centre = np.median(centres, axis=0)
+    inside = None
+    for _ in range(len(centres) + 1):
+        distance = np.sqrt(((centres - centre) ** 2).sum(1))
+        now = distance <= radius
+        if not now.any():  # nothing within the radius of the centre: the cluster has dispersed
+            return len(centres), float("nan")
+        if inside is not None and (now == inside).all():
+            break
+        inside = now
+        centre = centres[inside].mean(0)
+    return int((~inside).sum()), float(distance[inside].max())
+
+
+def run_one(system, positions, velocities, bodies, method, step_fs, total_ps, sample_ps, radius):
+    """One long NVE run; drift with its standard error, fluctuation, departed molecules, rigidity."""
+    r = common.nve_run(system, positions, velocities, method, step_fs * common.FS, total_ps, sample_ps, "CPU",
+                       bodies, threads=1)
+    t, e = r["time"], r["total"]
+    ok = r["failure"] is None and len(e) > 3
+    drift, error = stats.drift_with_error(t, e) if ok else (float("nan"), float("nan"))
+    final = r["context"].getState(getPositions=True).getPositions(asNumpy=True).value_in_unit(unit.nanometer)
+    gone, farthest = departed(molecule_centres(np.array(final), system, bodies), radius)
+    return {
+        "method": method, "step_fs": step_fs, "length_ps": float(t[-1] - t[0]) if len(t) else 0.0,
+        "temperature_K": float(np.mean(2 * r["kinetic"] / (r["dof"] * KB))),
+        "fluctuation": float(np.std(e)) if len(e) else float("nan"),
+        "drift_per_ns": drift, "drift_error_per_ns": error,
+        "verdict": verdict(drift, error),
+        "departed": gone, "farthest_nm": farthest,
+        "rigidity_nm": float(r["rigidity"].max()) if r["rigidity"].size else float("nan"),
+        "wall_s": r["wall"], "failure": r["failure"] or "",
+        "series_time": t - t[0] if len(t) else t, "series_energy": e - e[0] if len(e) else e,
+    }
+
+
+def verdict(drift, error, sigmas=2.0):
+    """Whether a drift differs from zero by more than `sigmas` standard errors, in words."""
+    if not (np.isfinite(drift) and np.isfinite(error)):
+        return "no fit"
+    if abs(drift) <= sigmas * error:
+        return "consistent with zero within %g SE" % sigmas
+    return "nonzero (%s, beyond %g SE)" % ("gain" if drift > 0 else "loss", sigmas)
+
+
+def run(temperature, plan, equilibrate_ps, sample_ps, radius, log):
+    """For each seed, one equilibrated start; from it, each method at each step size that lists the seed.
+
+    plan: {step_fs: (picoseconds per run, [seeds])}. Returns rows (one per run) with the
+    E(t) - E(0) series attached (keys series_time, series_energy).
+    """
+    rows = []
+    seeds = sorted({s for _, ss in plan.values() for s in ss})
+    for seed in seeds:
+        system, x, v, bodies = equilibrated_start(temperature, seed, equilibrate_ps, log)
+        gone, farthest = departed(molecule_centres(x, system, bodies), radius)
+        log("  drift: seed %d equilibrated (%g ps at %g K): %d molecules beyond %g nm, farthest %.2f nm" % (
+            seed, equilibrate_ps, temperature, gone, radius, farthest))
+        for step_fs in sorted(plan, reverse=True):
+            total_ps, step_seeds = plan[step_fs]
+            if seed not in step_seeds:
+                continue
+            for method in METHODS:
+                row = run_one(system, x, v, bodies, method, step_fs, total_ps, sample_ps, radius)
+                row.update(seed=seed, departed_at_start=gone)
+                rows.append(row)
+                log("  drift %-9s %g fs seed %d: %+.4f +- %.4f kJ/mol/ns, std E %.3g, T %.1f K, %d departed, %.0f s %s"
+                    % (method, step_fs, seed, row["drift_per_ns"], row["drift_error_per_ns"], row["fluctuation"],
+                       row["temperature_K"], row["departed"], row["wall_s"], row["failure"]))
+    return rows
+
+
+def summary(rows):
+    """Per step size and method: the runs' mean drift, their spread, and the largest |drift| + 2 SE."""
+    out = []
+    for step_fs in sorted({r["step_fs"] for r in rows}):
+        for method in METHODS:
+            runs = [r for r in rows if r["step_fs"] == step_fs and r["method"] == method and np.isfinite(r["drift_per_ns"])]
+            if not runs:
+                continue
+            d = np.array([r["drift_per_ns"] for r in runs])
+            se = np.array([r["drift_error_per_ns"] for r in runs])
+            out.append({"step_fs": step_fs, "method": method, "runs": len(runs), "mean_drift": float(d.mean()),
+                        "spread": float(d.std(ddof=1)) if len(d) > 1 else float("nan"),
+                        "bound": float(np.max(np.abs(d) + 2 * se)),
+                        "zero_within_2se": int(sum(abs(a) <= 2 * b for a, b in zip(d, se)))})
+    return out
+
+
+def plot(rows, path, block_ps=5.0):
+    """E(t) - E(0) per start and step size: every sample (faint), block means (bold) and the fitted line."""
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    panels = sorted({(r["step_fs"], r["seed"]) for r in rows}, key=lambda k: (-k[0], k[1]))
+    fig, axes = plt.subplots(1, len(panels), figsize=(5.2 * len(panels), 4.2), squeeze=False)
+    colours = {"M-RATTLE": "C0", "splitting": "C3"}
+    for ax, (step_fs, seed) in zip(axes[0], panels):
+        for r in rows:
+            t, e = r["series_time"], r["series_energy"]
+            if (r["step_fs"], r["seed"]) != (step_fs, seed) or len(t) < 4:
+                continue
+            c = colours[r["method"]]
+            ax.plot(t, e, color=c, lw=0.4, alpha=0.25)
+            per = max(1, int(round(block_ps / (t[1] - t[0]))))
+            n = len(e) // per
+            ax.plot(t[:n * per].reshape(n, per).mean(1), e[:n * per].reshape(n, per).mean(1), "o-", color=c, ms=2.5,
+                    lw=1.2, label="%s, %g ps means" % (r["method"], block_ps))
+            slope, intercept = np.polyfit(t, e, 1)
+            ax.plot(t[[0, -1]], intercept + slope * t[[0, -1]], "--", color=c, lw=1.2,
+                    label="fit: %+.4f +- %.4f kJ/mol/ns" % (r["drift_per_ns"], r["drift_error_per_ns"]))
+        ax.axhline(0.0, color="k", lw=0.5)
+        ax.set_title("%g fs, seed %d" % (step_fs, seed))
+        ax.set_xlabel("time (ps)")
+        ax.set_ylabel("E(t) - E(0) (kJ/mol)")
+        ax.legend(fontsize=7)
+    fig.suptitle("27 rigid benzene molecules, NVE from equilibrated starts (faint: every sample)")
+    fig.tight_layout()
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
