@@ -61,6 +61,15 @@ def test_quick_suite_writes_every_section(tmp_path):
     assert 200 < float(liquid["temperature (K)"]["M-RATTLE mean"]) < 450
     assert abs(float(liquid["equipartition target for that ratio (P conserved)"]["M-RATTLE mean"]) - 64 / 63) < 1e-12
 
+    if has_step_cost:
+        # The cost part: issue 11's targets in one table; SETTLE water and 2 threads were timed.
+        assert "### Speed targets (issue 11)" in text
+        ratios = {r["ratio"] for r in read(results / "cost_ratios.csv")}
+        assert {"mrattle/verlet", "mrattle/verlet_settle", "verlet_ccma/mrattle", "mrattle threads 1/2"} <= ratios
+        paper = read(results / "cost_paper_systems.csv")
+        assert {r["method"] for r in paper} == {"M-RATTLE", "splitting"}
+        assert all(float(r["us_per_step"]) > 0 for r in paper)
+
     # Reversibility: the rigid-body methods return to round-off, OpenMM's constrained ones to their tolerance.
     assert "### Time reversibility" in text
     for r in read(results / "accuracy_reversibility.csv"):
@@ -200,3 +209,29 @@ def test_drift_verdicts_follow_the_error_bars():
     text = "".join(run_suite.long_drift_reading(large, long_drift.summary(large)))
     assert "1 of 2 runs" in text and "cannot confirm" in text and "in 1 of 1 cases" in text
     assert "splitting 4 fs seed 1 is 10.0 SE from zero" in text and "exceeds it by more than 2 SE" in text
+
+
+def test_speed_target_rows_count_what_was_met():
+    sys.path.insert(0, os.path.join(ROOT, "benchmarks"))
+    from suite import cost
+
+    def ratio(platform, k, bodies, name, value, met):
+        return {"platform": platform, "atoms_per_body": str(k), "bodies": str(bodies), "ratio": name,
+                "value": str(value), "target": "", "met": met}
+    ratios = [ratio("Reference", 3, 3000, "mrattle/verlet", 3.2, "no"),
+              ratio("Reference", 30, 3000, "mrattle/verlet", 1.4, "yes"),
+              ratio("Reference", 3, 100, "mrattle/verlet", 9.0, "no"),   # below 1000 bodies: not counted
+              ratio("CPU", 3, 3000, "mrattle threads 1/2", 1.8, "yes"),
+              ratio("CPU", 3, 1000, "mrattle threads 1/2", 1.2, "-")]   # below 3000 bodies: not counted
+    micro = [{"benchmark": "SolveResetRotation", "atoms_per_body": k, "ns_per_body": ns} for k, ns in ((3, 70), (5, 90))]
+    micro.append({"benchmark": "ProjectBodyVelocities", "atoms_per_body": 5, "ns_per_body": 35.0})
+    rows = cost.target_rows(ratios, micro, villin_ratio=0.97)
+    by_start = lambda start: [r for r in rows if r["target"].startswith(start)]
+    assert by_start("rotation solve")[0]["met"] == "no"          # 90 ns > 80
+    assert by_start("rotation solve")[0]["measured"] == "70 to 90 ns"
+    assert by_start("velocity projection")[0]["met"] == "yes"
+    reference = [r for r in by_start("M-RATTLE <= 1.5x") if "Reference" in r["target"]][0]
+    assert reference["met"] == "1 of 2" and reference["measured"] == "1.40 to 3.20"
+    assert by_start("CPU Threads=2")[0]["met"] == "yes" and by_start("CPU Threads=2")[0]["measured"] == "1.80"
+    assert by_start("villin")[0]["met"] == "no"
+    assert [r for r in by_start("rigid water") if "Reference" in r["target"]][0]["measured"] == "not run"
