@@ -54,6 +54,12 @@ public:
      */
     int forEachBody(const std::function<bool(int)>& work);
     /**
+     * The same, with freeWork(begin, end) on ranges of the free-particle list in the same
+     * parallel region: one region per phase of a step instead of one per loop.
+     */
+    int forEachBodyAndFreeParticle(const std::function<bool(int)>& work,
+                                   const std::function<void(int, int)>& freeWork);
+    /**
      * Call work(begin, end) on contiguous ranges covering every particle, one per thread
      * when there are enough particles to pay for them: for per-atom loops (kicks, drifts)
      * whose atoms are independent, so results do not depend on the threads.
@@ -73,10 +79,12 @@ public:
      * constraints and M-RATTLE's reset of every body: writes every particle's new position
      * and velocity (formed from the displacement) into newPositions and newVelocities. Throws
      * an OpenMMException if a body finds no rotation or a result is not finite; x and v are
-     * not changed.
+     * not changed. With forces, each massive particle's velocity first gets the kick
+     * f (kickTime / m), in the same pass (velocity Verlet's first half kick).
      */
     void driftAndReset(std::vector<OpenMM::Vec3>& x, const std::vector<OpenMM::Vec3>& v, double h, double tolerance,
-                       std::vector<OpenMM::Vec3>& newPositions, std::vector<OpenMM::Vec3>& newVelocities);
+                       std::vector<OpenMM::Vec3>& newPositions, std::vector<OpenMM::Vec3>& newVelocities,
+                       const std::vector<OpenMM::Vec3>* forces = nullptr, double kickTime = 0);
     /** RATTLE position step for free-particle constraints: moves newPositions onto the constraints. */
     void constrainFreePositions(std::vector<OpenMM::Vec3>& oldPositions, std::vector<OpenMM::Vec3>& newPositions,
                                 double tolerance);
@@ -124,6 +132,7 @@ private:
     RigidBodyTopology bodies;
     std::vector<double> inverseMass;
     std::vector<RigidBodyMath::Shape> shapes;
+    std::vector<int> otherParticles;   // neither body members nor free: massless, virtual sites
     std::unique_ptr<OpenMM::ReferenceConstraints> freeConstraints;
     bool andersen = false;
     std::unique_ptr<OpenMM::ThreadPool> threads;

@@ -11,16 +11,11 @@ void ReferenceIntegrateMRattleStepKernel::integratePositions(ContextImpl& contex
     vector<Vec3>& x = ReferenceRigidBodyDynamics::positions(context);
     vector<Vec3>& v = ReferenceRigidBodyDynamics::velocities(context);
     const vector<Vec3>& f = ReferenceRigidBodyDynamics::forces(context);
-    const vector<double>& inverseMass = dynamics->inverseMasses();
     const double h = integrator.getStepSize();
     // Half kick, drift and reset into buffers: the Context is only written once every
     // body's reset has succeeded, so a failed step leaves it as it was.
-    dynamics->forEachParticleRange([&](int begin, int end) {
-        for (int i = begin; i < end; i++)
-            kicked[i] = (inverseMass[i] != 0 ? v[i] + f[i] * (0.5 * h * inverseMass[i]) : v[i]);
-    });
     try {
-        dynamics->driftAndReset(x, kicked, h, integrator.getConstraintTolerance(), newPositions, newVelocities);
+        dynamics->driftAndReset(x, v, h, integrator.getConstraintTolerance(), newPositions, newVelocities, &f, 0.5 * h);
     } catch (const OpenMMException& e) {
         throw OpenMMException(std::string("MRattleIntegrator: ") + e.what());
     }

@@ -33,6 +33,15 @@ ReferenceRigidBodyDynamics::ReferenceRigidBodyDynamics(const System& system, con
         inverseMass[i] = (mass == 0.0 ? 0.0 : 1.0 / mass);
     }
     shapes.assign(bodies.getNumBodies(), RigidBodyMath::Shape::General);
+    vector<bool> covered(n, false);
+    for (int b = 0; b < bodies.getNumBodies(); b++)
+        for (int i : bodies.getBodyParticles(b))
+            covered[i] = true;
+    for (int i : bodies.getFreeParticles())
+        covered[i] = true;
+    for (int i = 0; i < n; i++)
+        if (!covered[i])
+            otherParticles.push_back(i);
     if (!bodies.getFreeConstraints().empty()) {
         // OpenMM's constraint code (CCMA, SETTLE for rigid water) on the free constraints only.
         System freeSystem;
@@ -88,9 +97,17 @@ void ReferenceRigidBodyDynamics::setThreads(int numThreads) {
 }
 
 int ReferenceRigidBodyDynamics::forEachBody(const std::function<bool(int)>& work) {
+    return forEachBodyAndFreeParticle(work, nullptr);
+}
+
+int ReferenceRigidBodyDynamics::forEachBodyAndFreeParticle(const std::function<bool(int)>& work,
+                                                           const std::function<void(int, int)>& freeWork) {
     const int numBodies = bodies.getNumBodies();
+    const int numFree = bodies.getFreeParticles().size();
     // A parallel region costs microseconds, a body a fraction of one: only many bodies pay.
     if (!threads || numBodies < 256) {
+        if (freeWork)
+            freeWork(0, numFree);
         for (int b = 0; b < numBodies; b++)
             if (!work(b))
                 return b;
@@ -99,6 +116,8 @@ int ReferenceRigidBodyDynamics::forEachBody(const std::function<bool(int)>& work
     const int numThreads = threads->getNumThreads();
     vector<int> firstFailure(numThreads, INT_MAX);
     threads->execute([&](ThreadPool&, int thread) {
+        if (freeWork)
+            freeWork((long long) numFree * thread / numThreads, (long long) numFree * (thread + 1) / numThreads);
         const int begin = (long long) numBodies * thread / numThreads, end = (long long) numBodies * (thread + 1) / numThreads;
         for (int b = begin; b < end; b++)
             if (!work(b)) {
@@ -148,30 +167,43 @@ void ReferenceRigidBodyDynamics::seedRandom(int seed) {
 }
 
 void ReferenceRigidBodyDynamics::driftAndReset(vector<Vec3>& x, const vector<Vec3>& v, double h, double tolerance,
-                                               vector<Vec3>& newPositions, vector<Vec3>& newVelocities) {
-    forEachParticleRange([&](int begin, int end) {
-        for (int i = begin; i < end; i++) {
-            newVelocities[i] = v[i];
-            newPositions[i] = (inverseMass[i] != 0 ? x[i] + v[i] * h : x[i]);
-        }
-    });
+                                               vector<Vec3>& newPositions, vector<Vec3>& newVelocities,
+                                               const vector<Vec3>* forces, double kickTime) {
+    // Kick (if forces are given) and drift, one particle.
+    auto drift = [&](int i) {
+        const Vec3 kicked = (forces != nullptr && inverseMass[i] != 0) ? v[i] + (*forces)[i] * (kickTime * inverseMass[i])
+                                                                         : v[i];
+        newVelocities[i] = kicked;
+        newPositions[i] = (inverseMass[i] != 0 ? x[i] + kicked * h : x[i]);
+    };
+    for (int i : otherParticles)
+        drift(i);
+    // One parallel region: free particles' drifts, and each body's kick, drift and reset
+    // (new positions and velocities formed from displacements).
+    const vector<int>& freeParticles = bodies.getFreeParticles();
+    const double* oldPositions = coordinates(x);
+    double* velocities = coordinates(newVelocities);
+    double* positionsOut = coordinates(newPositions);
+    const int failed = forEachBodyAndFreeParticle(
+        [&](int b) {
+            for (int i : bodies.getBodyParticles(b))
+                drift(i);
+            return RigidBodyMath::driftAndResetBody(view(b), h, oldPositions, velocities, positionsOut).converged;
+        },
+        [&](int begin, int end) {
+            for (int k = begin; k < end; k++)
+                drift(freeParticles[k]);
+        });
     // Free particles: RATTLE for their constraints, velocities from the displacement.
     constrainFreePositions(x, newPositions, tolerance);
     const double inverseStep = 1.0 / h;
-    for (int i : bodies.getFreeParticles()) {
+    for (int i : freeParticles) {
         newVelocities[i] = (newPositions[i] - x[i]) * inverseStep;
         if (!std::isfinite(newPositions[i][0] + newPositions[i][1] + newPositions[i][2] + newVelocities[i][0] +
                            newVelocities[i][1] + newVelocities[i][2]))
             throw OpenMMException("particle " + std::to_string(i) +
                                   " would move to a position that is not finite; its force or velocity is not finite");
     }
-    // Bodies: M-RATTLE's reset, new positions and velocities formed from displacements.
-    const double* oldPositions = coordinates(x);
-    double* velocities = coordinates(newVelocities);
-    double* positionsOut = coordinates(newPositions);
-    const int failed = forEachBody([&](int b) {
-        return RigidBodyMath::driftAndResetBody(view(b), h, oldPositions, velocities, positionsOut).converged;
-    });
     if (failed != INT_MAX)
         throw OpenMMException("the position reset of rigid body " + std::to_string(failed) + " found no rotation in " +
                               std::to_string(RigidBodyMath::MaxRotationIterations) +
@@ -212,12 +244,30 @@ void ReferenceRigidBodyDynamics::kickAndProject(ContextImpl& context, double ste
     vector<Vec3>& v = velocities(context);
     const vector<Vec3>& f = forces(context);
     const double halfStep = 0.5 * stepSize;
-    forEachParticleRange([&](int begin, int end) {
-        for (int i = begin; i < end; i++)
-            if (inverseMass[i] != 0)
-                v[i] += f[i] * (halfStep * inverseMass[i]);
-    });
-    projectVelocities(x, v, tolerance);
+    auto kick = [&](int i) {
+        if (inverseMass[i] != 0)
+            v[i] += f[i] * (halfStep * inverseMass[i]);
+    };
+    for (int i : otherParticles)
+        kick(i);
+    // One parallel region: free particles' kicks, and each body's kick and projection.
+    const vector<int>& freeParticles = bodies.getFreeParticles();
+    const double* xs = coordinates(x);
+    double* vs = coordinates(v);
+    forEachBodyAndFreeParticle(
+        [&](int b) {
+            for (int i : bodies.getBodyParticles(b))
+                kick(i);
+            RigidBodyMath::projectBodyVelocities(view(b), xs, vs);
+            return true;
+        },
+        [&](int begin, int end) {
+            for (int k = begin; k < end; k++)
+                kick(freeParticles[k]);
+        });
+    // RATTLE's velocity step for the free constraints (it touches free particles only).
+    if (freeConstraints)
+        freeConstraints->applyToVelocities(x, v, inverseMass, tolerance);
     advanceClock(context, stepSize);
 }
 
