@@ -461,7 +461,7 @@ def sampling_section(rows, runs, per_run, eq, step, quick):
               "(the C-C shell fraction most of all): compare the difference between the methods' means with the "
               "spread of the per-run means (standard deviation over all runs of both methods). A difference "
               "smaller than that spread is not evidence that the methods sample differently.\n")
-    md += sampling_verdict(rows)
+    md += sampling_verdict(rows, runs)
     md.append("![sampling](results/sampling_histograms.png)\n")
     return md
 
@@ -482,7 +482,7 @@ def liquid_sampling_section(rows, molecules, runs, eq, per_run, drop, dof):
               "differences with the spread of run means. Drift: per-run slope of the total energy.\n" % (
                   molecules, eq, runs, per_run, drop, dof))
     md.append(sampling_table(rows))
-    md += sampling_verdict([r for r in rows if not r["quantity"].startswith("energy drift")])
+    md += sampling_verdict([r for r in rows if not r["quantity"].startswith("energy drift")], runs)
     return md
 
 
@@ -496,18 +496,26 @@ def sampling_table(rows):
                   "KS D": "%.3f", "KS p": "%.3f"})
 
 
-def sampling_verdict(rows):
-    """One line per quantity: is the methods' difference larger than the spread of run means?"""
+def sampling_verdict(rows, runs_per_method):
+    """One line per quantity: the methods' difference in standard errors of the difference of two
+    means of runs_per_method run means each, the standard error taken from the spread of run means."""
+    scale = math.sqrt(2.0 / runs_per_method)
     lines = []
     for r in rows:
         spread = r.get("spread of run means")
         a, b = r.get("M-RATTLE mean"), r.get("splitting mean")
-        if not all(isinstance(v, float) and math.isfinite(v) for v in (spread, a, b)):
+        if not all(isinstance(v, float) and math.isfinite(v) for v in (spread, a, b)) or spread <= 0:
             continue
-        lines.append("- %s: difference %.3g, spread of run means %.3g: %s.\n" % (
-            r["quantity"], abs(a - b), spread,
-            "larger than the spread" if abs(a - b) > spread else "within the spread (no detectable difference)"))
-    return ["\nThe methods' difference against the run-to-run spread:\n\n" + "".join(lines)] if lines else []
+        error = spread * scale
+        lines.append("- %s: difference %.3g, standard error %.3g: %.1f SE, %s.\n" % (
+            r["quantity"], abs(a - b), error, abs(a - b) / error,
+            "beyond 2 SE" if abs(a - b) > 2 * error else "within 2 SE (no detectable difference)"))
+    if not lines:
+        return []
+    return ["\nThe methods' difference against its standard error (the spread of run means times sqrt(2/%d), "
+            "%d runs per method). With %d quantities, one of them beyond 2 SE is expected about %.0f%% of the time "
+            "even if the methods sample alike, so a single such line is not evidence of a difference:\n\n" % (
+                runs_per_method, runs_per_method, len(lines), 100 * (1 - 0.9545 ** len(lines))) + "".join(lines)]
 
 
 def long_drift_section(rows, summary, temperature, equilibrate_ps, sample_ps, radius):

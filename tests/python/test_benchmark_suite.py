@@ -235,3 +235,13 @@ def test_speed_target_rows_count_what_was_met():
     assert by_start("CPU Threads=2")[0]["met"] == "yes" and by_start("CPU Threads=2")[0]["measured"] == "1.80"
     assert by_start("villin")[0]["met"] == "no"
     assert [r for r in by_start("rigid water") if "Reference" in r["target"]][0]["measured"] == "not run"
+
+
+def test_sampling_verdict_counts_standard_errors_of_the_difference():
+    sys.path.insert(0, os.path.join(ROOT, "benchmarks"))
+    import run_suite
+    rows = [{"quantity": "a", "M-RATTLE mean": 1.0, "splitting mean": 1.5, "spread of run means": 0.5},
+            {"quantity": "b", "M-RATTLE mean": 1.0, "splitting mean": 2.0, "spread of run means": 0.5}]
+    text = "".join(run_suite.sampling_verdict(rows, 8))   # SE = 0.5 * sqrt(2/8) = 0.25
+    assert "- a: difference 0.5, standard error 0.25: 2.0 SE, within 2 SE" in text
+    assert "- b: difference 1, standard error 0.25: 4.0 SE, beyond 2 SE" in text
