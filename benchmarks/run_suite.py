@@ -1,7 +1,7 @@
 #!/usr/bin/env python3
 """Regenerate docs/results.md: accuracy, cost, sampling, long-run drift and user-gain benchmarks.
 
-    ./benchmarks/run.sh            # full suite (over 30 minutes on 2 cores; the long drift runs about 13)
+    ./benchmarks/run.sh            # full suite (about 40 minutes on 2 cores; the long drift part about 11)
     ./benchmarks/run.sh --quick    # smoke test: tiny runs, written to a scratch folder
 
 Every table and plot in docs/results.md comes from one run of this script; nothing is
