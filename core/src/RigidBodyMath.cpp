@@ -299,10 +299,14 @@ RotationSolve resetBodyPositions(const BodyView& body, const double* oldPosition
 
 RotationSolve driftAndResetBody(const BodyView& body, double stepSize, const double* positions, double* velocities,
                                 double* newPositions) {
-    const Vector3d center = centerOfMass(body, positions);
-    Vector3d momentum = Vector3d::Zero();
-    for (int k = 0; k < body.numAtoms; k++)
-        momentum += body.masses[body.atoms[k]] * point(velocities, body.atoms[k]);
+    // Centre and centre-of-mass velocity in one pass (the same sums as centerOfMass's).
+    Vector3d massPosition = Vector3d::Zero(), momentum = Vector3d::Zero();
+    for (int k = 0; k < body.numAtoms; k++) {
+        const double m = body.masses[body.atoms[k]];
+        massPosition += m * point(positions, body.atoms[k]);
+        momentum += m * point(velocities, body.atoms[k]);
+    }
+    const Vector3d center = massPosition / body.totalMass;
     const Vector3d V = momentum / body.totalMass;
     if (!V.allFinite() || !center.allFinite())
         return RotationSolve();  // not converged: nothing is written

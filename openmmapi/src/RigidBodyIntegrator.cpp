@@ -83,8 +83,9 @@ vector<int> RigidBodyIntegrator::getLargeDefaultBodies() const {
     vector<int> large;
     if (!declaredBodies.empty())
         return large;
-    for (int b = 0; b < getTopology().getNumBodies(); b++)
-        if ((int) topology.getBodyParticles(b).size() > LargeBodyAtoms)
+    const RigidBodyTopology& bound = getTopology();
+    for (int b = 0; b < bound.getNumBodies(); b++)
+        if ((int) bound.getBodyParticles(b).size() > LargeBodyAtoms)
             large.push_back(b);
     return large;
 }

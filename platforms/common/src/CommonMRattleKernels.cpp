@@ -298,23 +298,16 @@ void CommonIntegrateMRattleStepKernel::setKernelArguments() {
 void CommonIntegrateMRattleStepKernel::project(double tolerance, bool onlyIfNotRigid, bool collide, double kT) {
     if (!argumentsSet)
         setKernelArguments();
-    const bool doubleMixed = cc.getUseDoublePrecision() || cc.getUseMixedPrecision();
     if (numBodies > 0) {
         projectBodies->setArg(7, onlyIfNotRigid ? 1 : 0);
         projectBodies->setArg(9, collide ? 1 : 0);
-        if (doubleMixed)
-            projectBodies->setArg(10, kT);
-        else
-            projectBodies->setArg(10, (float) kT);
+        setMixedArg(projectBodies, 10, kT);
         if (collide)
             projectBodies->setArg(12, (unsigned int) cc.getIntegrationUtilities().prepareRandomNumbers(cc.getPaddedNumAtoms()));
         projectBodies->execute(numBodies);
     }
     if (numClusters > 0) {
-        if (doubleMixed)
-            constrainFreeVelocities->setArg(6, tolerance);
-        else
-            constrainFreeVelocities->setArg(6, (float) tolerance);
+        setMixedArg(constrainFreeVelocities, 6, tolerance);
         constrainFreeVelocities->setArg(8, (int) cc.getStepCount());
         constrainFreeVelocities->execute(numClusters);
     }

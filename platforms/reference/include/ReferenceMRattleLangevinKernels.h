@@ -21,7 +21,7 @@ protected:
     void integratePositions(OpenMM::ContextImpl& context, const RigidBodyIntegrator& integrator) override;
 
 private:
-    std::vector<OpenMM::Vec3> middlePositions, middleVelocities;
+    std::vector<OpenMM::Vec3> kicked, middlePositions, middleVelocities;  // step buffers
 };
 
 } // namespace MRattlePlugin

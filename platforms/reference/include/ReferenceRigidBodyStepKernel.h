@@ -30,7 +30,6 @@ public:
         shapes.reset(new BodyShapeConstraints(system, topology));
         newPositions.resize(system.getNumParticles());
         newVelocities.resize(system.getNumParticles());
-        kicked.resize(system.getNumParticles());
     }
     void execute(OpenMM::ContextImpl& context, const RigidBodyIntegrator& integrator, bool& forcesAreValid) override {
         useThreadsOf(context);
@@ -121,7 +120,7 @@ protected:
 
     std::unique_ptr<ReferenceRigidBodyDynamics> dynamics;
     std::unique_ptr<BodyShapeConstraints> shapes;
-    std::vector<OpenMM::Vec3> newPositions, newVelocities, kicked;  // step buffers
+    std::vector<OpenMM::Vec3> newPositions, newVelocities;  // step buffers
 };
 
 } // namespace MRattlePlugin

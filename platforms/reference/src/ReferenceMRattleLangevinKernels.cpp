@@ -25,6 +25,7 @@ void ReferenceIntegrateMRattleLangevinStepKernel::integratePositions(ContextImpl
     const int n = x.size();
     dynamics->seedRandom(integrator.getRandomNumberSeed());
     // A full kick (leapfrog) and RATTLE's velocity step at the current positions.
+    kicked.resize(n);
     dynamics->forEachParticleRange([&](int begin, int end) {
         for (int i = begin; i < end; i++)
             kicked[i] = (inverseMass[i] != 0 ? v[i] + f[i] * (h * inverseMass[i]) : v[i]);

@@ -33,14 +33,11 @@ ReferenceRigidBodyDynamics::ReferenceRigidBodyDynamics(const System& system, con
         inverseMass[i] = (mass == 0.0 ? 0.0 : 1.0 / mass);
     }
     shapes.assign(bodies.getNumBodies(), RigidBodyMath::Shape::General);
-    vector<bool> covered(n, false);
-    for (int b = 0; b < bodies.getNumBodies(); b++)
-        for (int i : bodies.getBodyParticles(b))
-            covered[i] = true;
+    vector<bool> free(n, false);
     for (int i : bodies.getFreeParticles())
-        covered[i] = true;
+        free[i] = true;
     for (int i = 0; i < n; i++)
-        if (!covered[i])
+        if (bodies.getBodyOfParticle(i) < 0 && !free[i])
             otherParticles.push_back(i);
     if (!bodies.getFreeConstraints().empty()) {
         // OpenMM's constraint code (CCMA, SETTLE for rigid water) on the free constraints only.
@@ -169,17 +166,17 @@ void ReferenceRigidBodyDynamics::seedRandom(int seed) {
 void ReferenceRigidBodyDynamics::driftAndReset(vector<Vec3>& x, const vector<Vec3>& v, double h, double tolerance,
                                                vector<Vec3>& newPositions, vector<Vec3>& newVelocities,
                                                const vector<Vec3>* forces, double kickTime) {
-    // Kick (if forces are given) and drift, one particle.
-    auto drift = [&](int i) {
-        const Vec3 kicked = (forces != nullptr && inverseMass[i] != 0) ? v[i] + (*forces)[i] * (kickTime * inverseMass[i])
-                                                                         : v[i];
-        newVelocities[i] = kicked;
-        newPositions[i] = (inverseMass[i] != 0 ? x[i] + kicked * h : x[i]);
+    // One particle's velocity after the kick (if forces are given).
+    auto kicked = [&](int i) {
+        return (forces != nullptr && inverseMass[i] != 0) ? v[i] + (*forces)[i] * (kickTime * inverseMass[i]) : v[i];
     };
-    for (int i : otherParticles)
-        drift(i);
-    // One parallel region: free particles' drifts, and each body's kick, drift and reset
-    // (new positions and velocities formed from displacements).
+    for (int i : otherParticles) {
+        newVelocities[i] = kicked(i);
+        newPositions[i] = (inverseMass[i] != 0 ? x[i] + newVelocities[i] * h : x[i]);
+    }
+    // One parallel region: free particles' drifts (their velocities come from the constrained
+    // displacement below), and each body's kick, drift and reset (driftAndResetBody writes the
+    // body's positions and velocities, formed from displacements).
     const vector<int>& freeParticles = bodies.getFreeParticles();
     const double* oldPositions = coordinates(x);
     double* velocities = coordinates(newVelocities);
@@ -187,12 +184,14 @@ void ReferenceRigidBodyDynamics::driftAndReset(vector<Vec3>& x, const vector<Vec
     const int failed = forEachBodyAndFreeParticle(
         [&](int b) {
             for (int i : bodies.getBodyParticles(b))
-                drift(i);
+                newVelocities[i] = kicked(i);
             return RigidBodyMath::driftAndResetBody(view(b), h, oldPositions, velocities, positionsOut).converged;
         },
         [&](int begin, int end) {
-            for (int k = begin; k < end; k++)
-                drift(freeParticles[k]);
+            for (int k = begin; k < end; k++) {
+                const int i = freeParticles[k];   // free particles are massive
+                newPositions[i] = x[i] + kicked(i) * h;
+            }
         });
     // Free particles: RATTLE for their constraints, velocities from the displacement.
     constrainFreePositions(x, newPositions, tolerance);
