@@ -25,8 +25,7 @@ def parse():
     p.add_argument("--quick", action="store_true", help="tiny runs for CI smoke tests")
     p.add_argument("--build", default=os.path.join(ROOT, "build"), help="CMake build folder")
     p.add_argument("--out", default=None, help="output folder (default docs/, or a scratch folder with --quick)")
-    p.add_argument("--only", default="accuracy,cost,sampling,drift,gains,langevin",
-                   help="comma-separated parts to run")
+    p.add_argument("--only", default=",".join(ALL_PARTS), help="comma-separated parts to run")
     return p.parse_args()
 
 
@@ -95,7 +94,7 @@ def main():
         cluster = mrattle.models.benzeneCluster(temperature=250 * unit.kelvin, seed=1)
         x = np.array(cluster.positions.value_in_unit(unit.nanometer))
         v = np.array(cluster.velocities.value_in_unit(unit.nanometer / unit.picosecond))
-        bodies = accuracy._bodies(cluster)
+        bodies = common.benzene_bodies(cluster.system.getNumParticles())
         rows = accuracy.energy_vs_step("27-benzene cluster", cluster.system, x, v, bodies, ["M-RATTLE", "splitting"],
                                        steps if not q else [1, 2], 4.096 if not q else 0.1, log)
         log("accuracy: non-planar 5-site cluster (OpenMM's RATTLE and CCMA too)")
@@ -143,7 +142,7 @@ def main():
     if "drift" in parts:
         log("drift: long NVE of the 27-benzene cluster from equilibrated starts, both methods")
         # {step (fs): (ps per run, seeds)}: 200 ps at 4 fs from two starts, 100 ps at 2 fs from one
-        # (a 2 fs run costs twice as much; the whole part takes about 13 minutes on 2 cores).
+        # (a 2 fs run costs twice as much; the whole part takes about 11 minutes on 2 cores).
         dplan, deq, dsample, dradius, dtemp = ({4.0: (200.0, [1, 2]), 2.0: (100.0, [1])}, 100.0, 0.1, 2.0, 200.0) \
             if not q else ({4.0: (0.4, [1])}, 0.4, 0.02, 2.0, 200.0)
         drows = long_drift.run(dtemp, dplan, deq, dsample, dradius, log)
@@ -556,11 +555,11 @@ def long_drift_section(rows, summary, temperature, equilibrate_ps, sample_ps, ra
                          s["zero_within_2se"], s["runs"], s["bound"]))
     if lines:
         md.append("Per step size and method:\n\n" + "".join(lines))
-    md += long_drift_reading(rows, summary)
+    md += long_drift_reading(rows)
     return md
 
 
-def long_drift_reading(rows, summary, claim=0.03):
+def long_drift_reading(rows, claim=0.03):
     """What the long runs show and cannot show, worded from their numbers."""
     md = []
     finite = [r for r in rows if math.isfinite(r["drift_per_ns"]) and math.isfinite(r["drift_error_per_ns"])]

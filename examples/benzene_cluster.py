@@ -10,9 +10,7 @@ and the speed.
     python3 examples/benzene_cluster.py --steps 5000 --step-size 2 --temperature 250
 """
 import argparse
-import math
 import os
-import sys
 import time
 
 import numpy as np

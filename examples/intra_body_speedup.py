@@ -11,7 +11,6 @@ trajectory is checked in tests/python/test_interactions.py.)
 import argparse
 import time
 
-import numpy as np
 import openmm
 from openmm import unit
 

@@ -211,3 +211,21 @@ def machine_description():
         pass
     import os
     return "%s, %d cores visible, OpenMM %s" % (model, os.cpu_count() or 0, openmm.Platform.getOpenMMVersion())
+
+
+def benzene_bodies(num_particles):
+    """The bodies of the benzene models (12 consecutive atoms per molecule)."""
+    return [list(range(12 * m, 12 * m + 12)) for m in range(num_particles // 12)]
+
+
+def interleaved_median(integrators, steps, batches):
+    """Median seconds per step of each integrator, timed in `batches` rounds that interleave them so
+    all share the machine's load. integrators: {name: integrator}; steps: {name: steps per batch}."""
+    import statistics
+    seconds = {name: [] for name in integrators}
+    for _ in range(batches):
+        for name, integrator in integrators.items():
+            start = time.perf_counter()
+            integrator.step(steps[name])
+            seconds[name].append((time.perf_counter() - start) / steps[name])
+    return {name: statistics.median(values) for name, values in seconds.items()}

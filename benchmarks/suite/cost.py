@@ -3,7 +3,6 @@ import csv
 import io
 import subprocess
 
-import numpy as np
 
 
 def run_step_cost(binary, platforms, bodies, atoms, repeats, batch_seconds, log, threads=(1,)):

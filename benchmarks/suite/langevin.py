@@ -3,7 +3,6 @@ LangevinMiddleIntegrator with SETTLE on the same System (see benchmarks/langevin
 import csv
 import math
 import os
-import sys
 import time
 
 import numpy as np

@@ -10,9 +10,8 @@ import numpy as np
 from openmm import unit
 
 import mrattle
-from . import common, gains, stats
-
-KB = 0.00831446261815324  # kJ/mol/K
+from . import common, gains, sampling, stats
+from .sampling import KB
 METHODS = ("M-RATTLE", "splitting")
 
 
@@ -24,7 +23,7 @@ def equilibrated_start(temperature, seed, equilibrate_ps, log):
                               thermostat_seed=seed)
     x = np.array(state.getPositions(asNumpy=True).value_in_unit(unit.nanometer))
     v = np.array(state.getVelocities(asNumpy=True).value_in_unit(unit.nanometer / unit.picosecond))
-    bodies = [list(range(12 * m, 12 * m + 12)) for m in range(model.system.getNumParticles() // 12)]
+    bodies = common.benzene_bodies(model.system.getNumParticles())
     masses = np.array([model.system.getParticleMass(i).value_in_unit(unit.dalton)
                        for i in range(model.system.getNumParticles())])
     return model.system, x, without_net_motion(x, v, masses), bodies
@@ -39,8 +38,7 @@ def without_net_motion(x, v, masses):
     v = v - masses.dot(v) / mass
     r = x - c
     L = (masses[:, None] * np.cross(r, v)).sum(0)
-    inertia = (masses * (r ** 2).sum(1)).sum() * np.eye(3) - np.einsum("i,ij,ik->jk", masses, r, r)
-    return v - np.cross(np.linalg.solve(inertia, L), r)
+    return v - np.cross(np.linalg.solve(sampling._inertia(r, masses), L), r)
 
 
 def molecule_centres(positions, system, bodies):

@@ -1,7 +1,6 @@
 """Cost per step on the paper's own systems: one rigid benzene and the 27-benzene cluster
 (forces included: the models' Lennard-Jones and Coulomb sites, no cutoff), M-RATTLE against
 the splitting method, on the Reference platform and the CPU platform with one thread."""
-import statistics
 import time
 
 import numpy as np
@@ -9,13 +8,12 @@ from openmm import unit
 
 import mrattle
 from . import common
-from .accuracy import _bodies
 
 
 def _context(model, method, platform_name):
     """(integrator, context): the caller keeps both, or the Context is freed."""
     import openmm
-    bodies = _bodies(model)
+    bodies = common.benzene_bodies(model.system.getNumParticles())
     x = np.array(model.positions.value_in_unit(unit.nanometer))
     integrator = common.make_integrator(method, 2 * common.FS, bodies=bodies)
     plat, props = common.platform(platform_name, 1)
@@ -41,15 +39,10 @@ def compare(platforms, batches, batch_seconds, log):
                 integrator.step(20)
                 per_step = (time.perf_counter() - start) / 20
                 steps[method] = max(1, int(batch_seconds / max(per_step, 1e-9)))
-            seconds = {m: [] for m in runs}
-            for _ in range(batches):
-                for method, integrator in runs.items():
-                    start = time.perf_counter()
-                    integrator.step(steps[method])
-                    seconds[method].append((time.perf_counter() - start) / steps[method])
+            per_step = common.interleaved_median(runs, steps, batches)
             for method in runs:
                 rows.append({"system": label, "platform": platform_name, "method": method,
-                             "us_per_step": statistics.median(seconds[method]) * 1e6})
+                             "us_per_step": per_step[method] * 1e6})
             ratio = rows[-2]["us_per_step"] / rows[-1]["us_per_step"]
             log("  %-20s %-9s M-RATTLE %.1f us/step, splitting %.1f us/step (ratio %.2f)" % (
                 label, platform_name, rows[-2]["us_per_step"], rows[-1]["us_per_step"], ratio))

@@ -25,7 +25,7 @@ def equilibrated(num_molecules, equilibrate_ps, log):
 def run(system, state, method, velocities, total_ps, step_fs):
     """One NVE run from the equilibrated positions with the given rigid velocities; a frame every 100 fs."""
     n_mol = system.getNumParticles() // 12
-    bodies = [list(range(12 * m, 12 * m + 12)) for m in range(n_mol)]
+    bodies = common.benzene_bodies(system.getNumParticles())
     integrator = common.make_integrator(method, step_fs * common.FS, bodies=bodies)
     plat, props = common.platform("CPU")
     context = openmm.Context(system, integrator, plat, props)
@@ -59,7 +59,7 @@ def run(system, state, method, velocities, total_ps, step_fs):
 def run_many(num_molecules, seeds, equilibrate_ps, total_ps, drop_ps, step_fs, log):
     """Both methods from one equilibrated state, with the same fresh 300 K rigid velocities per seed."""
     system, state = equilibrated(num_molecules, equilibrate_ps, log)
-    bodies = [list(range(12 * m, 12 * m + 12)) for m in range(num_molecules)]
+    bodies = common.benzene_bodies(12 * num_molecules)
     results = {m: {k: [] for k in ("temperature", "translational", "rotational", "potential")}
                for m in ("M-RATTLE", "splitting")}
     drifts = {m: [] for m in results}

@@ -12,12 +12,6 @@ def fitted_order(step_sizes, errors):
     return float(slope)
 
 
-def drift_per_ns(times_ps, energies):
-    """Slope of a least-squares line through total energy against time, in kJ/mol per ns."""
-    slope, _ = np.polyfit(np.asarray(times_ps, float), np.asarray(energies, float), 1)
-    return float(slope) * 1000.0
-
-
 def drift_with_error(times_ps, energies):
     """Drift (kJ/mol/ns) and its standard error: the least-squares slope's error, inflated by the
     residuals' statistical inefficiency (energies sampled along a trajectory are correlated)."""

@@ -5,8 +5,6 @@ hydrogen constrained in the protein, 2 fs, CPU platform: ns/day of OpenMM's Verl
 the waters declared rigid bodies (RATTLE for the protein's constraints)."""
 import math
 import os
-import statistics
-import time
 
 import openmm
 from openmm import app, unit
@@ -51,15 +49,11 @@ def compare(threads, steps_per_batch, batches, log):
     log("  villin: %d atoms, %d rigid waters, CPU platform with %d threads" % (atoms, waters, threads))
     for integrator, _ in runs.values():
         integrator.step(10)  # warm-up: first forces, neighbour lists, kernels
-    seconds = {name: [] for name in runs}
-    for _ in range(batches):
-        for name, (integrator, _) in runs.items():
-            start = time.perf_counter()
-            integrator.step(steps_per_batch)
-            seconds[name].append((time.perf_counter() - start) / steps_per_batch)
+    seconds = common.interleaved_median({name: pair[0] for name, pair in runs.items()},
+                                        {name: steps_per_batch for name in runs}, batches)
     rows = []
     for name, (integrator, context) in runs.items():
-        per_step = statistics.median(seconds[name])
+        per_step = seconds[name]
         state = context.getState(getEnergy=True)
         finite = math.isfinite(state.getKineticEnergy().value_in_unit(unit.kilojoule_per_mole) +
                                state.getPotentialEnergy().value_in_unit(unit.kilojoule_per_mole))

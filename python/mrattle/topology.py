@@ -1,6 +1,5 @@
 """Choosing rigid bodies from an OpenMM Topology: all waters, residues by name, or any
 residue a function picks; the rest of the System stays flexible."""
-import openmm
 from openmm import unit
 
 # Residue names OpenMM's force fields and common PDB files use for water.

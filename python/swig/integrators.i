@@ -119,7 +119,8 @@ static PyObject* intListToPython(const std::vector<int>& values) {
         large = self.getLargeDefaultBodies()
         if large:
             import warnings
-            sizes = [len(self.getBodiesInEffect()[b]) for b in large]
+            bodies = self.getBodiesInEffect()
+            sizes = [len(bodies[b]) for b in large]
             warnings.warn('%d molecule(s) of more than %d atoms became rigid bodies because no body was declared '
                           '(the largest has %d atoms). Declare the bodies you want rigid, e.g. '
                           "mrattle.declareRigidBodies(integrator, topology, system, 'water'), to keep the rest flexible."

@@ -9,6 +9,7 @@ import mrattle
 ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
 # The build tree's package lives in <build>/python/mrattle.
 BUILD = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(mrattle.__file__))))
+sys.path.insert(0, os.path.join(ROOT, "benchmarks"))  # run_suite and the suite package
 
 
 def read(path):
@@ -80,7 +81,6 @@ def test_quick_suite_writes_every_section(tmp_path):
 
 
 def test_a_partial_run_replaces_only_its_own_sections():
-    sys.path.insert(0, os.path.join(ROOT, "benchmarks"))
     import run_suite
     existing = "# Results\n\nintro\n\n## Cost\n\nold cost\n\n## Accuracy\n\nold accuracy\n### Sub\nold\n" \
                "\n## Sampling\n\nold sampling\n\nTotal wall time of this run: 3.0 minutes.\n"
@@ -105,7 +105,6 @@ def test_quick_langevin_validation_writes_its_section(tmp_path):
 
 
 def test_drift_standard_error_covers_the_true_slope():
-    sys.path.insert(0, os.path.join(ROOT, "benchmarks"))
     import numpy as np
     from suite import stats
     rng = np.random.default_rng(4)
@@ -125,7 +124,6 @@ def test_drift_standard_error_covers_the_true_slope():
 
 
 def test_a_rigid_step_counts_as_stable_only_within_its_error_bars():
-    sys.path.insert(0, os.path.join(ROOT, "benchmarks"))
     from suite import gains
 
     def row(step, drift, error):
@@ -154,7 +152,6 @@ def test_quick_long_drift_gives_finite_drifts_with_error_bars(tmp_path):
 
 
 def test_departed_molecules_are_counted_around_the_cluster_that_remains():
-    sys.path.insert(0, os.path.join(ROOT, "benchmarks"))
     import numpy as np
     from suite import long_drift
     grid = np.array([(i, j, k) for i in range(3) for j in range(3) for k in range(3)], float) * 0.5
@@ -171,7 +168,6 @@ def test_departed_molecules_are_counted_around_the_cluster_that_remains():
 
 
 def test_net_motion_removal_zeroes_momentum_and_angular_momentum_and_keeps_bodies_rigid():
-    sys.path.insert(0, os.path.join(ROOT, "benchmarks"))
     import numpy as np
     from suite import long_drift
     rng = np.random.default_rng(3)
@@ -192,7 +188,6 @@ def test_net_motion_removal_zeroes_momentum_and_angular_momentum_and_keeps_bodie
 
 
 def test_drift_verdicts_follow_the_error_bars():
-    sys.path.insert(0, os.path.join(ROOT, "benchmarks"))
     import run_suite
     from suite import long_drift
     assert long_drift.verdict(0.03, 0.02) == "consistent with zero within 2 SE"
@@ -203,16 +198,15 @@ def test_drift_verdicts_follow_the_error_bars():
         return {"method": method, "step_fs": 4.0, "seed": seed, "drift_per_ns": drift, "drift_error_per_ns": error,
                 "departed": 0}
     small = [row("M-RATTLE", 0.004, 0.005), row("splitting", -0.002, 0.004)]
-    text = "".join(run_suite.long_drift_reading(small, long_drift.summary(small)))
+    text = "".join(run_suite.long_drift_reading(small))
     assert "2 of 2 runs have a drift consistent with zero" in text and "agree with the independent" in text
     large = [row("M-RATTLE", 0.004, 0.02), row("splitting", 0.1, 0.01)]
-    text = "".join(run_suite.long_drift_reading(large, long_drift.summary(large)))
+    text = "".join(run_suite.long_drift_reading(large))
     assert "1 of 2 runs" in text and "cannot confirm" in text and "in 1 of 1 cases" in text
     assert "splitting 4 fs seed 1 is 10.0 SE from zero" in text and "exceeds it by more than 2 SE" in text
 
 
 def test_speed_target_rows_count_what_was_met():
-    sys.path.insert(0, os.path.join(ROOT, "benchmarks"))
     from suite import cost
 
     def ratio(platform, k, bodies, name, value, met):
@@ -238,7 +232,6 @@ def test_speed_target_rows_count_what_was_met():
 
 
 def test_sampling_verdict_counts_standard_errors_of_the_difference():
-    sys.path.insert(0, os.path.join(ROOT, "benchmarks"))
     import run_suite
     rows = [{"quantity": "a", "M-RATTLE mean": 1.0, "splitting mean": 1.5, "spread of run means": 0.5},
             {"quantity": "b", "M-RATTLE mean": 1.0, "splitting mean": 2.0, "spread of run means": 0.5}]
