@@ -135,7 +135,10 @@ private:
     std::vector<int> otherParticles;   // neither body members nor free: massless, virtual sites
     std::unique_ptr<OpenMM::ReferenceConstraints> freeConstraints;
     bool andersen = false;
-    std::unique_ptr<OpenMM::ThreadPool> threads;
+    int numThreads = 1;
+    std::unique_ptr<OpenMM::ThreadPool> helpers;   // numThreads - 1 workers; the caller is the last
+    /** Call work(t) for t = 0 .. numThreads - 1, t = numThreads - 1 on the calling thread. */
+    void forEachThread(const std::function<void(int)>& work);
     std::mt19937_64 collisionRandom;
     bool randomIsSet = false;
 };
