@@ -30,6 +30,9 @@ public:
         shapes.reset(new BodyShapeConstraints(system, topology));
         newPositions.resize(system.getNumParticles());
         newVelocities.resize(system.getNumParticles());
+        hasVirtualSites = false;
+        for (int i = 0; i < system.getNumParticles(); i++)
+            hasVirtualSites |= system.isVirtualSite(i);
     }
     void execute(OpenMM::ContextImpl& context, const RigidBodyIntegrator& integrator, bool& forcesAreValid) override {
         useThreadsOf(context);
@@ -97,6 +100,15 @@ protected:
             dynamics->setThreads(std::stoi(context.getPlatform().getPropertyValue(context.getOwner(), "Threads")));
     }
     bool threadsChecked = false;
+    /**
+     * Place the virtual sites at the new positions (OpenMM 7.7 and 8.x alike). OpenMM's
+     * Reference code loops over every particle to find them: skipped when there are none.
+     */
+    void placeVirtualSites(OpenMM::ContextImpl& context) {
+        if (hasVirtualSites)
+            context.computeVirtualSites();
+    }
+    bool hasVirtualSites = false;
     /** Throw naming the first particle whose value is not finite. */
     static void requireFinite(const std::vector<OpenMM::Vec3>& values, const char* what) {
         for (size_t i = 0; i < values.size(); i++)

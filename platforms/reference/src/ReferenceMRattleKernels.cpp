@@ -21,5 +21,5 @@ void ReferenceIntegrateMRattleStepKernel::integratePositions(ContextImpl& contex
     }
     x.swap(newPositions);
     v.swap(newVelocities);
-    context.computeVirtualSites();  // OpenMM 7.7 and 8.x alike
+    placeVirtualSites(context);
 }

@@ -63,5 +63,5 @@ void ReferenceIntegrateMRattleLangevinStepKernel::integratePositions(ContextImpl
     }
     x.swap(newPositions);
     v.swap(newVelocities);
-    context.computeVirtualSites();
+    placeVirtualSites(context);
 }

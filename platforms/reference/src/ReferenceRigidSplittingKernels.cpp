@@ -44,5 +44,5 @@ void ReferenceIntegrateRigidSplittingStepKernel::integratePositions(ContextImpl&
             x[i] = newPositions[i];
         }
     }
-    context.computeVirtualSites();  // OpenMM 7.7 and 8.x alike
+    placeVirtualSites(context);
 }
