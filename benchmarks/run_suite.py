@@ -71,6 +71,9 @@ def main():
         log("cost: profile of an M-RATTLE step (k = 5)")
         prof = cost.profile(binary, 5, log) if not q else []
         write_csv(os.path.join(results_dir, "cost_profile.csv"), prof)
+        log("cost: share of OpenMM's own work in a 1-thread CPU step (bounds the 2-thread speed-up)")
+        thread_prof = cost.thread_profile(binary, [3, 5, 12, 30], 3000, log) if not q else []
+        write_csv(os.path.join(results_dir, "cost_thread_profile.csv"), thread_prof)
         log("cost: villin headpiece in water, CPU platform with 2 threads")
         from suite import paper_cost, villin
         vrows = villin.compare(2, 20, 7, log) if not q else []
@@ -78,7 +81,7 @@ def main():
         log("cost: the paper's systems (one benzene, the 27-benzene cluster), forces included")
         prows = paper_cost.compare(["Reference", "CPU"], 7 if not q else 1, 0.2 if not q else 0.01, log)
         write_csv(os.path.join(results_dir, "cost_paper_systems.csv"), prows)
-        md += cost_section(timings, ratios, micro, prof, vrows, prows, q)
+        md += cost_section(timings, ratios, micro, prof, thread_prof, vrows, prows, q)
 
     if "accuracy" in parts:
         log("accuracy: isolated benzene")
@@ -307,7 +310,7 @@ def reversibility_section(rows, step_counts):
     return md
 
 
-def cost_section(timings, ratios, micro, prof, villin_rows, paper_rows, quick):
+def cost_section(timings, ratios, micro, prof, thread_prof, villin_rows, paper_rows, quick):
     from suite import cost, villin
     md = ["\n## Cost per step, forces excluded\n"]
     md.append("From `benchmarks/step_cost` (C++; see docs/benchmarks-cpp.md): N rigid bodies of k atoms whose only "
@@ -359,30 +362,29 @@ def cost_section(timings, ratios, micro, prof, villin_rows, paper_rows, quick):
                   "differences between the methods are in the sections above and below, not here.\n")
         md.append(table(paper_rows, [("system", "system"), ("platform", "platform"), ("method", "method"),
                                      ("us per step", "us_per_step")], {"us per step": "%.1f"}))
-    md += limits_section(timings, ratios, micro, prof)
+    md += limits_section(timings, ratios, micro, prof, thread_prof)
     return md
 
 
-def threads_reason(timings):
-    """Why M-RATTLE gains less from a second thread than splitting, in this run's numbers."""
+def threads_reason(timings, thread_prof):
+    """Why M-RATTLE gains less than 2x from a second thread, in this run's numbers."""
     def cpu(integrator, threads, k=3, bodies=3000):
         values = [float(r["median_us_per_step"]) for r in timings if r["platform"] == "CPU" and
                   r["integrator"] == integrator and r.get("threads", "1") == str(threads) and
                   int(r["atoms_per_body"]) == k and int(r["bodies"]) == bodies]
         return values[0] if values else float("nan")
-    return ("each step's per-body work runs in two parallel regions (kick, drift and reset; kick and "
-            "projection), free particles included. For 3000 bodies of 3 atoms the second thread saves %.0f us of "
-            "M-RATTLE's %.0f us step but %.0f us of the splitting method's %.0f us, whose per-body work is "
-            "several times larger; OpenMM's own step does not gain (VerletIntegrator: %.0f us with 1 thread, "
-            "%.0f with 2). The profile puts most of an M-RATTLE step in the per-body functions, so halving them "
-            "should save more than measured; an empty region of OpenMM's ThreadPool costs about 12 us here (two "
-            "per step; docs/benchmarks-cpp.md), which explains only part of the difference, and the rest is not "
-            "identified" % (
-                cpu("mrattle", 1) - cpu("mrattle", 2), cpu("mrattle", 1), cpu("splitting", 1) - cpu("splitting", 2),
-                cpu("splitting", 1), cpu("verlet", 1), cpu("verlet", 2)))
+    text = ("each step's per-body work runs in two parallel regions (kick, drift and reset; kick and projection), "
+            "the calling thread taking one share. OpenMM's own part of the step, its force call, is not split and "
+            "gets slower with 2 threads (OpenMM's VerletIntegrator, 3000 waters: %.0f us with 1 thread, %.0f with "
+            "2; phase timings in docs/benchmarks-cpp.md)" % (cpu("verlet", 1), cpu("verlet", 2)))
+    if thread_prof:
+        text += ("; perf's share of the plugin in a 1-thread step bounds the speed-up at %s for k = %s" % (
+            ", ".join("%.2f" % r["amdahl_bound"] for r in thread_prof),
+            ", ".join(str(r["atoms_per_body"]) for r in thread_prof)))
+    return text
 
 
-def limits_section(timings, ratios, micro, prof):
+def limits_section(timings, ratios, micro, prof, thread_prof):
     """What limits the speed targets, in numbers from this run."""
     def per_atom(platform, integrator, k, bodies=3000):
         values = [float(r["median_ns_per_atom_step"]) for r in timings if r["platform"] == platform and
@@ -423,7 +425,7 @@ def limits_section(timings, ratios, micro, prof):
              "tolerance; M-RATTLE's other advantages there are the planar and redundant constraint sets CCMA "
              "cannot handle and rigidity to round-off"),
             ("mrattle threads 1/2", "CPU platform, 2 threads against 1 (target: 1.7x from 3000 bodies)",
-             threads_reason(timings)),
+             threads_reason(timings, thread_prof)),
             ("mrattle_allpairs/mrattle", "Declared constraints (within 10%)",
              "constraints inside a body are ignored, so declaring them costs nothing per step"),
             ("mrattle/splitting", "Against splitting (no slower)",

@@ -75,8 +75,8 @@ def micro_benchmarks(binary, log):
     return rows
 
 
-def profile(step_cost, atoms, log):
-    """Where an M-RATTLE step spends its time (perf, if installed): symbol and share."""
+def _perf_report(step_cost, step_args, sort, log):
+    """perf record step_cost with step_args, then perf report sorted by `sort`: [(share %, name)]."""
     import os
     import shutil
     import tempfile
@@ -85,23 +85,54 @@ def profile(step_cost, atoms, log):
         return []
     with tempfile.TemporaryDirectory() as scratch:
         data = os.path.join(scratch, "perf.data")
-        record = subprocess.run(["perf", "record", "-q", "-o", data, "--", step_cost, "--platforms", "Reference",
-                                 "--bodies", "1000", "--atoms", str(atoms), "--integrators", "mrattle",
-                                 "--repeats", "5", "--batch-seconds", "0.2", "--out", os.devnull,
-                                 "--ratios", os.devnull], capture_output=True, text=True)
+        record = subprocess.run(["perf", "record", "-q", "-o", data, "--", step_cost] + step_args +
+                                ["--out", os.devnull, "--ratios", os.devnull], capture_output=True, text=True)
         if record.returncode != 0:
             log("  perf record failed: %s" % record.stderr.strip().splitlines()[-1:])
             return []
-        report = subprocess.run(["perf", "report", "-i", data, "--stdio", "--no-children", "--sort", "symbol",
-                                 "--percent-limit", "1"], capture_output=True, text=True)
-    rows = []
+        report = subprocess.run(["perf", "report", "-i", data, "--stdio", "--no-children", "--sort", sort,
+                                 "--percent-limit", "0.1"], capture_output=True, text=True)
+    shares = []
     for line in report.stdout.splitlines():
         parts = line.split()
-        if len(parts) >= 3 and parts[0].endswith("%") and parts[1] == "[.]":
-            symbol = " ".join(p for p in parts[2:] if p != "-")
-            rows.append({"share_percent": float(parts[0][:-1]), "function": symbol})
+        if len(parts) >= 2 and parts[0].endswith("%") and not line.lstrip().startswith("#"):
+            name = " ".join(p for p in parts[1:] if p not in ("-", "[.]", "[k]"))
+            shares.append((float(parts[0][:-1]), name))
+    return shares
+
+
+def profile(step_cost, atoms, log):
+    """Where an M-RATTLE step spends its time (perf, if installed): symbol and share."""
+    shares = _perf_report(step_cost, ["--platforms", "Reference", "--bodies", "1000", "--atoms", str(atoms),
+                                      "--integrators", "mrattle", "--repeats", "5", "--batch-seconds", "0.2"],
+                          "symbol", log)
+    rows = [{"share_percent": share, "function": name} for share, name in shares if share >= 1]
     for r in rows[:6]:
         log("  %5.1f%%  %s" % (r["share_percent"], r["function"]))
+    return rows
+
+
+def thread_profile(step_cost, atoms_list, bodies, log):
+    """Amdahl's bound on the 2-thread speed-up of an M-RATTLE step on the CPU platform.
+
+    perf profiles a 1-thread run by library: the plugin's per-body work is split over the
+    threads, OpenMM's own part of the step (its force call: clearing and summing force
+    buffers, virtual-site passes) is not. With s the share of the plugin's work,
+    a second thread can at best make the step 1 / (1 - s / 2) times faster."""
+    rows = []
+    for k in atoms_list:
+        shares = _perf_report(step_cost, ["--platforms", "CPU", "--threads", "1", "--bodies", str(bodies), "--atoms",
+                                          str(k), "--integrators", "mrattle", "--repeats", "5",
+                                          "--batch-seconds", "0.2"], "dso", log)
+        if not shares:
+            return []
+        plugin = sum(share for share, name in shares if name.startswith("libMRattle"))
+        openmm = sum(share for share, name in shares if name.startswith("libOpenMM"))
+        split = plugin / (plugin + openmm)
+        rows.append({"atoms_per_body": k, "bodies": bodies, "plugin_percent": plugin, "openmm_percent": openmm,
+                     "amdahl_bound": 1.0 / (1.0 - split / 2.0)})
+        log("  k=%-3d plugin %.1f%%, OpenMM %.1f%% of samples: 2 threads at most %.2fx" % (
+            k, plugin, openmm, rows[-1]["amdahl_bound"]))
     return rows
 
 
