@@ -26,20 +26,31 @@ Matrix3d crossMatrix(const Vector3d& w) {
     return m;
 }
 
-/**
- * I^-1 b for the inertia I = tr(J) - J of a second moment J given by its six entries, by
- * I's cofactors (I and its adjugate are symmetric). No pivoting: an inertia tensor needs
- * none; the result is not finite if I is singular.
- */
-Vector3d solveInertia(double j00, double j01, double j02, double j11, double j12, double j22, const Vector3d& b) {
-    const double traceJ = j00 + j11 + j22;
-    const double i00 = traceJ - j00, i11 = traceJ - j11, i22 = traceJ - j22;
-    const double c00 = i11 * i22 - j12 * j12, c01 = j01 * i22 + j12 * j02, c02 = j01 * j12 + i11 * j02;
-    const double c11 = i00 * i22 - j02 * j02, c12 = i00 * j12 + j01 * j02, c22 = i00 * i11 - j01 * j01;
-    const double inverseDet = 1.0 / (i00 * c00 - j01 * c01 - j02 * c02);
-    return Vector3d(c00 * b[0] + c01 * b[1] + c02 * b[2], c01 * b[0] + c11 * b[1] + c12 * b[2],
-                    c02 * b[0] + c12 * b[1] + c22 * b[2]) * inverseDet;
-}
+/** A body's second moment J = sum m a a^T about its centre, by its six entries. */
+struct SecondMoment {
+    double j00, j01, j02, j11, j12, j22;
+};
+
+/** The inertia I = tr(J) - J of a second moment, formed once for the solves that need it. */
+struct Inertia {
+    explicit Inertia(const SecondMoment& J)
+        : traceJ(J.j00 + J.j11 + J.j22), i00(traceJ - J.j00), i11(traceJ - J.j11), i22(traceJ - J.j22), j01(J.j01),
+          j02(J.j02), j12(J.j12) {
+    }
+    /**
+     * I^-1 b by I's cofactors (I and its adjugate are symmetric). No pivoting: an inertia
+     * tensor needs none; the result is not finite if I is singular.
+     */
+    Vector3d solve(double b0, double b1, double b2) const {
+        const double c00 = i11 * i22 - j12 * j12, c01 = j01 * i22 + j12 * j02, c02 = j01 * j12 + i11 * j02;
+        const double c11 = i00 * i22 - j02 * j02, c12 = i00 * j12 + j01 * j02, c22 = i00 * i11 - j01 * j01;
+        const double inverseDet = 1.0 / (i00 * c00 - j01 * c01 - j02 * c02);
+        return Vector3d(c00 * b0 + c01 * b1 + c02 * b2, c01 * b0 + c11 * b1 + c12 * b2,
+                        c02 * b0 + c12 * b1 + c22 * b2) * inverseDet;
+    }
+    double traceJ, i00, i11, i22;   // the diagonal of I
+    double j01, j02, j12;            // minus its off-diagonal
+};
 
 /** Unit vector along a linear body: the direction of its atom farthest from the centre. */
 Vector3d linearAxis(const BodyView& body, const double* positions, const Vector3d& center) {
@@ -154,7 +165,9 @@ RotationSolve solveResetRotation(const Matrix3d& J, const Matrix3d& Y) {
     return solveResetRotationForTorque(J, vexOfSkewPart(Y));
 }
 
-RotationSolve solveResetRotationForTorque(const Matrix3d& J, const Vector3d& target) {
+namespace {
+
+RotationSolve solveTorqueCondition(const SecondMoment& J, const Vector3d& target) {
     // P is parametrised by its half Gibbs vector w (tan of half the angle along the axis):
     // P - 1 = c ([w]x + [w]x^2), c = 2 / (1 + |w|^2), orthogonal to round-off for any w and
     // formed without the identity, so a small rotation keeps its digits. With I = tr(J) - J,
@@ -164,12 +177,12 @@ RotationSolve solveResetRotationForTorque(const Matrix3d& J, const Vector3d& tar
     // expressions cost several times more here).
     RotationSolve result;
     result.iterations = MaxRotationIterations;
-    const double j00 = J(0, 0), j01 = J(0, 1), j02 = J(0, 2), j11 = J(1, 1), j12 = J(1, 2), j22 = J(2, 2);
-    const double traceJ = j00 + j11 + j22;
-    const double i00 = traceJ - j00, i11 = traceJ - j11, i22 = traceJ - j22;   // I = tr(J) - J
+    const Inertia inertia(J);
+    const double j00 = J.j00, j01 = J.j01, j02 = J.j02, j11 = J.j11, j12 = J.j12, j22 = J.j22;
+    const double traceJ = inertia.traceJ, i00 = inertia.i00, i11 = inertia.i11, i22 = inertia.i22;
     const double t0 = 0.5 * target[0], t1 = 0.5 * target[1], t2 = 0.5 * target[2];
     // At w = 0 the Jacobian is the inertia: the first iterate is the linearised answer.
-    const Vector3d linear = solveInertia(j00, j01, j02, j11, j12, j22, Vector3d(t0, t1, t2));
+    const Vector3d linear = inertia.solve(t0, t1, t2);
     double w0 = linear[0], w1 = linear[1], w2 = linear[2];
     // Newton while far from the root; near it the Jacobian is kept (a chord step), whose
     // error shrinks by about the previous correction's relative size: a thermal step needs
@@ -243,6 +256,12 @@ RotationSolve solveResetRotationForTorque(const Matrix3d& J, const Vector3d& tar
     return result;
 }
 
+} // namespace
+
+RotationSolve solveResetRotationForTorque(const Matrix3d& J, const Vector3d& target) {
+    return solveTorqueCondition(SecondMoment{J(0, 0), J(0, 1), J(0, 2), J(1, 1), J(1, 2), J(2, 2)}, target);
+}
+
 namespace {
 
 /**
@@ -271,11 +290,7 @@ RotationSolve solveBodyRotation(const BodyView& body, const double* oldPositions
         t1 += b2 * d[0] - b0 * d[2];
         t2 += b0 * d[1] - b1 * d[0];
     }
-    Matrix3d J;
-    J(0, 0) = j00; J(0, 1) = J(1, 0) = j01; J(0, 2) = J(2, 0) = j02;
-    J(1, 1) = j11; J(1, 2) = J(2, 1) = j12; J(2, 2) = j22;
-    const Vector3d target(t0, t1, t2);
-    return solveResetRotationForTorque(J, target);
+    return solveTorqueCondition(SecondMoment{j00, j01, j02, j11, j12, j22}, Vector3d(t0, t1, t2));
 }
 
 } // namespace
@@ -377,13 +392,13 @@ RigidMotion nearestRigidMotion(const BodyView& body, const double* positions, co
     const double j00 = s00 - ma0 * c0, j01 = s01 - ma0 * c1, j02 = s02 - ma0 * c2;
     const double j11 = s11 - ma1 * c1, j12 = s12 - ma1 * c2, j22 = s22 - ma2 * c2;
     const Vector3d L(l0 - (c1 * p2 - c2 * p1), l1 - (c2 * p0 - c0 * p2), l2 - (c0 * p1 - c1 * p0));
-    const double traceJ = j00 + j11 + j22;
+    const Inertia inertia(SecondMoment{j00, j01, j02, j11, j12, j22});
     if (body.linear) {
         // I = j (1 - u u^T): no spin about the axis.
         Vector3d u = linearAxis(body, positions, motion.center);
-        motion.omega = traceJ > 0 ? Vector3d((L - L.dot(u) * u) / traceJ) : Vector3d::Zero();
+        motion.omega = inertia.traceJ > 0 ? Vector3d((L - L.dot(u) * u) / inertia.traceJ) : Vector3d::Zero();
     } else {
-        motion.omega = solveInertia(j00, j01, j02, j11, j12, j22, L);
+        motion.omega = inertia.solve(L[0], L[1], L[2]);
     }
     return motion;
 }
