@@ -16,7 +16,7 @@ import sys
 import time
 
 import openmm
-from openmm import app, unit
+from openmm import unit
 
 import mrattle
 

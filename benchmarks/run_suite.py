@@ -91,18 +91,11 @@ def main():
         accuracy.plot_isolated(iso, os.path.join(results_dir, "accuracy_isolated_benzene.png"))
 
         log("accuracy: 27-benzene cluster")
-        import mrattle
-        import numpy as np
-        from openmm import unit
-        cluster = mrattle.models.benzeneCluster(temperature=250 * unit.kelvin, seed=1)
-        x = np.array(cluster.positions.value_in_unit(unit.nanometer))
-        v = np.array(cluster.velocities.value_in_unit(unit.nanometer / unit.picosecond))
-        bodies = common.benzene_bodies(cluster.system.getNumParticles())
-        rows = accuracy.energy_vs_step("27-benzene cluster", cluster.system, x, v, bodies, ["M-RATTLE", "splitting"],
+        csys, x, v, bodies = accuracy.cluster_start()
+        rows = accuracy.energy_vs_step("27-benzene cluster", csys, x, v, bodies, ["M-RATTLE", "splitting"],
                                        steps if not q else [1, 2], 4.096 if not q else 0.1, log)
         log("accuracy: non-planar 5-site cluster (OpenMM's RATTLE and CCMA too)")
-        tsys, tx, tbodies = common.tetrahedral_cluster(constraints=9)
-        tv = common.rigid_velocities(tsys, tx, tbodies, 200.0, seed=5)
+        tsys, tx, tv, tbodies = accuracy.tetrahedral_start()
         # Reference platform: OpenMM 7.7's CPU platform turns this constrained system's
         # coordinates to NaN on the first Verlet step, which Reference does not.
         rows += accuracy.energy_vs_step("27 tetrahedral 5-site", tsys, tx, tv, tbodies,
@@ -366,13 +359,17 @@ def cost_section(timings, ratios, micro, prof, thread_prof, villin_rows, paper_r
     return md
 
 
+def timing(timings, column, platform, integrator, k, bodies=3000, threads=1):
+    """One step_cost timing (column of the first matching row) as a float; nan if that run is not in timings."""
+    values = [float(r[column]) for r in timings if r["platform"] == platform and r["integrator"] == integrator and
+              int(r["atoms_per_body"]) == k and int(r["bodies"]) == bodies and r.get("threads", "1") == str(threads)]
+    return values[0] if values else float("nan")
+
+
 def threads_reason(timings, thread_prof):
     """Why M-RATTLE gains less than 2x from a second thread, in this run's numbers."""
-    def cpu(integrator, threads, k=3, bodies=3000):
-        values = [float(r["median_us_per_step"]) for r in timings if r["platform"] == "CPU" and
-                  r["integrator"] == integrator and r.get("threads", "1") == str(threads) and
-                  int(r["atoms_per_body"]) == k and int(r["bodies"]) == bodies]
-        return values[0] if values else float("nan")
+    def cpu(integrator, threads):
+        return timing(timings, "median_us_per_step", "CPU", integrator, 3, threads=threads)
     text = ("each step's per-body work runs in two parallel regions (kick, drift and reset; kick and projection), "
             "the calling thread taking one share. OpenMM's own part of the step, its force call, is not split and "
             "gets slower with 2 threads (OpenMM's VerletIntegrator, 3000 waters: %.0f us with 1 thread, %.0f with "
@@ -386,11 +383,8 @@ def threads_reason(timings, thread_prof):
 
 def limits_section(timings, ratios, micro, prof, thread_prof):
     """What limits the speed targets, in numbers from this run."""
-    def per_atom(platform, integrator, k, bodies=3000):
-        values = [float(r["median_ns_per_atom_step"]) for r in timings if r["platform"] == platform and
-                  r["integrator"] == integrator and int(r["atoms_per_body"]) == k and int(r["bodies"]) == bodies
-                  and r.get("threads", "1") == "1"]
-        return values[0] if values else float("nan")
+    def per_atom(platform, integrator, k):
+        return timing(timings, "median_ns_per_atom_step", platform, integrator, k)
 
     def micro_ns(name, k):
         values = [r["ns_per_body"] for r in micro if r["benchmark"] == name and r["atoms_per_body"] == k]

@@ -28,24 +28,45 @@ def _angular_momentum(state, system):
     return (m[:, None] * np.cross(x, v)).sum(0)
 
 
+def benzene_start():
+    """One free benzene with rigid-body velocities at 300 K: (system, positions, velocities, bodies).
+
+    This and the two below build, afresh on each call, the starting points that the energy runs
+    and the reversibility test share."""
+    model = mrattle.models.benzene()
+    x = _positions(model)
+    bodies = _bodies(model)
+    return model.system, x, common.rigid_velocities(model.system, x, bodies, 300.0, seed=3), bodies
+
+
+def cluster_start():
+    """The 27-benzene cluster at 250 K (seed 1) with its own velocities: (system, positions, velocities, bodies)."""
+    cluster = mrattle.models.benzeneCluster(temperature=250 * unit.kelvin, seed=1)
+    v = np.array(cluster.velocities.value_in_unit(unit.nanometer / unit.picosecond))
+    return cluster.system, _positions(cluster), v, _bodies(cluster)
+
+
+def tetrahedral_start():
+    """27 non-planar 5-site bodies with 9 constraints each, at 200 K: (system, positions, velocities, bodies)."""
+    system, x, bodies = common.tetrahedral_cluster(constraints=9)
+    return system, x, common.rigid_velocities(system, x, bodies, 200.0, seed=5), bodies
+
+
 def isolated_benzene(steps_fs, total_ps, log):
     """Free rigid benzene: energy, angular momentum and trajectory error against a fine-step reference."""
-    model = mrattle.models.benzene()
-    x0 = _positions(model)
-    bodies = _bodies(model)
-    v0 = common.rigid_velocities(model.system, x0, bodies, 300.0, seed=3)
+    system, x0, v0, bodies = benzene_start()
     reference_step = min(steps_fs) / 16 * common.FS
     # Sample every 32 fs: a whole number of steps for every step size, so all runs end at total_ps.
     total_ps = max(1, round(total_ps / 0.032)) * 0.032
-    ref = common.nve_run(model.system, x0, v0, "M-RATTLE", reference_step, total_ps, total_ps, "Reference", bodies)
+    ref = common.nve_run(system, x0, v0, "M-RATTLE", reference_step, total_ps, total_ps, "Reference", bodies)
     ref_positions = ref["context"].getState(getPositions=True).getPositions(asNumpy=True).value_in_unit(unit.nanometer)
     rows = []
     for method in ("M-RATTLE", "splitting"):
         for h in steps_fs:
-            run = common.nve_run(model.system, x0, v0, method, h * common.FS, total_ps, 0.032, "Reference", bodies)
+            run = common.nve_run(system, x0, v0, method, h * common.FS, total_ps, 0.032, "Reference", bodies)
             state = run["context"].getState(getPositions=True, getVelocities=True)
-            L0 = _angular_momentum(_initial_state(model.system, x0, v0), model.system)
-            L = _angular_momentum(state, model.system)
+            L0 = _angular_momentum(_initial_state(system, x0, v0), system)
+            L = _angular_momentum(state, system)
             e = run["total"]
             rows.append({
                 "system": "isolated benzene", "method": method, "step_fs": h,
@@ -267,22 +288,12 @@ def _forward_and_back(system, positions, velocities, method, step_ps, steps, bod
 
 def reversibility(step_counts, step_fs, log):
     """Time reversibility of each method on the suite's systems (forward, reverse velocities, back)."""
-    benzene = mrattle.models.benzene()
-    bx = _positions(benzene)
-    bbodies = _bodies(benzene)
-    bv = common.rigid_velocities(benzene.system, bx, bbodies, 300.0, seed=3)
-    cluster = mrattle.models.benzeneCluster(temperature=250 * unit.kelvin, seed=1)
-    cx = _positions(cluster)
-    cv = np.array(cluster.velocities.value_in_unit(unit.nanometer / unit.picosecond))
-    cbodies = _bodies(cluster)
-    tsys, tx, tbodies = common.tetrahedral_cluster(constraints=9)
-    tv = common.rigid_velocities(tsys, tx, tbodies, 200.0, seed=5)
-    cases = [("isolated benzene", benzene.system, bx, bv, bbodies, ["M-RATTLE", "splitting"]),
-             ("27-benzene cluster", cluster.system, cx, cv, cbodies, ["M-RATTLE", "splitting"]),
-             ("27 tetrahedral 5-site", tsys, tx, tv, tbodies,
+    cases = [("isolated benzene", benzene_start(), ["M-RATTLE", "splitting"]),
+             ("27-benzene cluster", cluster_start(), ["M-RATTLE", "splitting"]),
+             ("27 tetrahedral 5-site", tetrahedral_start(),
               ["M-RATTLE", "splitting", "RATTLE (CustomIntegrator)", "Verlet + CCMA"])]
     rows = []
-    for label, system, x, v, bodies, methods in cases:
+    for label, (system, x, v, bodies), methods in cases:
         for method in methods:
             constrained = method in ("Verlet + CCMA", "RATTLE (CustomIntegrator)")
             for tolerance in ([1e-8, 1e-10, 1e-12] if constrained else [None]):

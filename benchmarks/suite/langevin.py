@@ -52,10 +52,6 @@ def exact_geometry(system, positions):
     return context.getState(getPositions=True).getPositions()
 
 
-def bodies_of(topology):
-    return [[atom.index for atom in residue.atoms()] for residue in topology.residues()]
-
-
 def temperatures(velocities, masses, bodies, dof_total, removes_cm):
     """Kinetic, translational and rotational temperatures of rigid bodies (nonlinear)."""
     kinetic = 0.5 * np.sum(masses[:, None] * velocities ** 2)
@@ -100,7 +96,7 @@ def run_water(method, barostat, equilibrate, production, sample, seed, log):
     context = openmm.Context(system, integrator, platform)
     context.setPositions(exact_geometry(system, pdb.positions))
     context.setVelocitiesToTemperature(300 * unit.kelvin, seed)
-    bodies = bodies_of(pdb.topology)
+    bodies = mrattle.rigidBodies(pdb.topology, system)  # the waters: every residue of tip3p.pdb
     masses = np.array([system.getParticleMass(i).value_in_unit(unit.dalton) for i in range(system.getNumParticles())])
     removes_cm = any(isinstance(f, openmm.CMMotionRemover) for f in system.getForces())
     dof = 6 * len(bodies) - (3 if removes_cm else 0)
