@@ -32,14 +32,14 @@ PrincipalFrame principalFrame(const Matrix3d& secondMoment, const RigidBodyMath:
     // atoms instead: it then turns with the body, and a step back undoes a step forward.
     const double scale = frame.moments.cwiseAbs().maxCoeff();
     const double degenerate = 1e-10 * scale;
-    auto atomDirection = [&](const Vector3d& normal, int skip) -> Vector3d {
-        // The first atom (in body order, after `skip` usable ones) with a component off `normal`.
-        int seen = 0;
+    auto atomDirection = [&](const Vector3d& normal) -> Vector3d {
+        // The unit direction of the first atom (in body order) with a component off the unit
+        // `normal` (any component if normal is zero), that component only; zero if none has.
         for (int k = 0; k < body.numAtoms; k++) {
             Vector3d a = point(positions, body.atoms[k]) - center;
             if (normal.squaredNorm() > 0)
                 a -= a.dot(normal) * normal;
-            if (a.norm() > 1e-6 * std::sqrt(scale / body.totalMass) && seen++ == skip)
+            if (a.norm() > 1e-6 * std::sqrt(scale / body.totalMass))
                 return a.normalized();
         }
         return Vector3d::Zero();
@@ -49,13 +49,8 @@ PrincipalFrame principalFrame(const Matrix3d& secondMoment, const RigidBodyMath:
     const bool equal01 = std::fabs(frame.moments(0) - frame.moments(1)) <= degenerate;
     const bool equal12 = std::fabs(frame.moments(1) - frame.moments(2)) <= degenerate;
     if (equal01 && equal12) {  // a spherical top: two atoms' directions
-        Vector3d e0 = atomDirection(Vector3d::Zero(), 0);
-        Vector3d e1 = Vector3d::Zero();
-        for (int skip = 0; skip < body.numAtoms && e1.squaredNorm() == 0; skip++) {
-            Vector3d candidate = atomDirection(e0, skip);
-            if (candidate.squaredNorm() > 0)
-                e1 = candidate;
-        }
+        const Vector3d e0 = atomDirection(Vector3d::Zero());
+        const Vector3d e1 = atomDirection(e0);   // orthogonal to e0, so e0 x e1 is a unit vector
         if (e0.squaredNorm() > 0 && e1.squaredNorm() > 0) {
             frame.axes.col(0) = e0;
             frame.axes.col(1) = e1;
@@ -65,12 +60,10 @@ PrincipalFrame principalFrame(const Matrix3d& secondMoment, const RigidBodyMath:
     else if (equal01 || equal12) {  // a symmetric top: the unique axis, and an atom in the plane
         const int unique = equal01 ? 2 : 0, first = equal01 ? 0 : 1, second = first + 1;
         const Vector3d normal = frame.axes.col(unique);
-        Vector3d e = atomDirection(normal, 0);
+        const Vector3d e = atomDirection(normal);
         if (e.squaredNorm() > 0) {
             frame.axes.col(first) = e;
-            frame.axes.col(second) = normal.cross(e);
-            if (frame.axes.determinant() < 0)
-                frame.axes.col(second) = -frame.axes.col(second);
+            frame.axes.col(second) = normal.cross(e);   // right-handed: (e, n x e, n) and (n, e, n x e)
         }
     }
     return frame;
