@@ -140,7 +140,9 @@ void CommonIntegrateMRattleStepKernel::initialize(const System& system, const Ri
         cc.getIntegrationUtilities().initRandomNumberGenerator(langevinIntegrator->getRandomNumberSeed());
         const int vectorSize = doubleMixed ? sizeof(mm_double4) : sizeof(mm_float4);
         posqBackup.initialize(cc, cc.getPaddedNumAtoms(), cc.getPosq().getElementSize(), "mrattlePosqBackup");
-        correctionBackup.initialize(cc, cc.getPaddedNumAtoms(), cc.getPosq().getElementSize(), "mrattleCorrectionBackup");
+        // Only mixed precision has position corrections; the kernel still needs an argument.
+        correctionBackup.initialize(cc, cc.getUseMixedPrecision() ? cc.getPaddedNumAtoms() : 1,
+                                    cc.getPosq().getElementSize(), "mrattleCorrectionBackup");
         velmBackup.initialize(cc, cc.getPaddedNumAtoms(), vectorSize, "mrattleVelmBackup");
     }
     std::map<std::string, std::string> defines;
@@ -154,8 +156,10 @@ void CommonIntegrateMRattleStepKernel::initialize(const System& system, const Ri
     kickVelocities = program->createKernel("kickVelocities");
     projectBodies = program->createKernel("projectBodies");
     constrainFreeVelocities = program->createKernel("constrainFreeVelocities");
-    langevinNoise = program->createKernel("langevinNoise");
-    backupState = program->createKernel("backupState");
+    if (langevin) {
+        langevinNoise = program->createKernel("langevinNoise");
+        backupState = program->createKernel("backupState");
+    }
 }
 
 void CommonIntegrateMRattleStepKernel::mapAtoms() {
@@ -272,17 +276,14 @@ void CommonIntegrateMRattleStepKernel::setKernelArguments() {
     constrainFreeVelocities->addArg(failure);
     constrainFreeVelocities->addArg(0);  // 8: the step
 
-    langevinNoise->addArg(numAtoms);
-    langevinNoise->addArg(cc.getVelm());
-    addMixed(langevinNoise, 1.0);  // 2: a = exp(-friction h)
-    addMixed(langevinNoise, 0.0);  // 3: sqrt((1 - a^2) kT)
-    if (langevin)
+    if (langevin) {  // the Langevin kernels are launched only by a Langevin step
+        langevinNoise->addArg(numAtoms);
+        langevinNoise->addArg(cc.getVelm());
+        addMixed(langevinNoise, 1.0);  // 2: a = exp(-friction h)
+        addMixed(langevinNoise, 0.0);  // 3: sqrt((1 - a^2) kT)
         langevinNoise->addArg(integration.getRandom());
-    else
-        langevinNoise->addArg(failure);  // never launched without Langevin
-    langevinNoise->addArg(0u);  // 5: random index
-    langevinNoise->addArg(failure);
-    if (langevin) {
+        langevinNoise->addArg(0u);  // 5: random index
+        langevinNoise->addArg(failure);
         backupState->addArg(numAtoms);
         backupState->addArg(cc.getPosq());
         backupState->addArg(cc.getUseMixedPrecision() ? cc.getPosqCorrection() : cc.getPosq());

@@ -67,20 +67,6 @@ DEVICE mixed3 apply(Matrix3 A, mixed3 v) {
                        A.m20*v.x + A.m21*v.y + A.m22*v.z);
 }
 
-/** Solve A x = b by the adjugate (A nonsingular); returns false if it is singular. */
-DEVICE bool solve3(Matrix3 A, mixed3 b, mixed3* x) {
-    mixed c00 = A.m11*A.m22 - A.m12*A.m21, c01 = A.m02*A.m21 - A.m01*A.m22, c02 = A.m01*A.m12 - A.m02*A.m11;
-    mixed c10 = A.m12*A.m20 - A.m10*A.m22, c11 = A.m00*A.m22 - A.m02*A.m20, c12 = A.m02*A.m10 - A.m00*A.m12;
-    mixed c20 = A.m10*A.m21 - A.m11*A.m20, c21 = A.m01*A.m20 - A.m00*A.m21, c22 = A.m00*A.m11 - A.m01*A.m10;
-    mixed det = A.m00*c00 + A.m01*c10 + A.m02*c20;
-    if (det == 0)
-        return false;
-    mixed inv = 1/det;
-    *x = make_mixed3((c00*b.x + c01*b.y + c02*b.z)*inv, (c10*b.x + c11*b.y + c12*b.z)*inv,
-                     (c20*b.x + c21*b.y + c22*b.z)*inv);
-    return true;
-}
-
 /** A^-1 by the adjugate; returns false if A is singular. */
 DEVICE bool inverse3(Matrix3 A, Matrix3* inverse) {
     Matrix3 C;
@@ -95,6 +81,15 @@ DEVICE bool inverse3(Matrix3 A, Matrix3* inverse) {
     C.m10 *= inv; C.m11 *= inv; C.m12 *= inv;
     C.m20 *= inv; C.m21 *= inv; C.m22 *= inv;
     *inverse = C;
+    return true;
+}
+
+/** Solve A x = b by A's adjugate; returns false if A is singular. */
+DEVICE bool solve3(Matrix3 A, mixed3 b, mixed3* x) {
+    Matrix3 inverse;
+    if (!inverse3(A, &inverse))
+        return false;
+    *x = apply(inverse, b);
     return true;
 }
 
@@ -222,6 +217,83 @@ KERNEL void kickAndDrift(int numAtoms, int paddedNumAtoms, mixed kickTime, mixed
 }
 
 /**
+ * P - 1 of a body's reset: the torque condition's Newton solve. Each atom's drift relative to
+ * the centres is h (v - V); its position about the centre is (x - origin) - center, the
+ * centre taken relative to the first atom (origin) so that no digits are lost.
+ */
+DEVICE bool solveBodyRotation(int start, int end, GLOBAL const int* RESTRICT bodyAtoms,
+        GLOBAL const real4* RESTRICT posq, GLOBAL const real4* RESTRICT posqCorrection,
+        GLOBAL const mixed4* RESTRICT newVelocity, mixed3 origin, mixed3 center, mixed3 V, mixed h, Matrix3* delta) {
+    Matrix3 J = zeroMatrix();
+    mixed3 target = make_mixed3(0, 0, 0);
+    for (int k = start; k < end; k++) {
+        const int atom = bodyAtoms[k];
+        const mixed4 v = newVelocity[atom];
+        const mixed m = 1/v.w;
+        const mixed3 a = loadPosition(posq, posqCorrection, atom) - origin - center;
+        addOuter(&J, m, a);
+        target += m*cross(a, h*(make_mixed3(v.x, v.y, v.z) - V));
+    }
+    return solveRotation(J, target, delta);
+}
+
+/**
+ * The same for a linear body, in closed form: u x (j p - w) = 0 with p = P u, spin about the
+ * axis no degree of freedom, P the smallest rotation taking u to p.
+ */
+DEVICE bool solveLinearBodyRotation(int start, int end, GLOBAL const int* RESTRICT bodyAtoms,
+        GLOBAL const real4* RESTRICT posq, GLOBAL const real4* RESTRICT posqCorrection,
+        GLOBAL const mixed4* RESTRICT newVelocity, mixed3 origin, mixed3 center, mixed3 V, mixed h, Matrix3* delta) {
+    *delta = zeroMatrix();
+    mixed3 u = make_mixed3(0, 0, 0);
+    mixed farthest = -1;
+    for (int k = start; k < end; k++) {
+        const mixed3 a = loadPosition(posq, posqCorrection, bodyAtoms[k]) - origin - center;
+        const mixed r2 = dot(a, a);
+        if (r2 > farthest) {
+            farthest = r2;
+            u = a;
+        }
+    }
+    const mixed length = sqrt(farthest);
+    u = (length > 0 ? u*(1/length) : make_mixed3(1, 0, 0));
+    mixed3 w = make_mixed3(0, 0, 0);
+    mixed j = 0;
+    for (int k = start; k < end; k++) {
+        const int atom = bodyAtoms[k];
+        const mixed4 v = newVelocity[atom];
+        const mixed m = 1/v.w;
+        const mixed3 a = loadPosition(posq, posqCorrection, atom) - origin - center;
+        const mixed s = dot(a, u);
+        w += (m*s)*(a + h*(make_mixed3(v.x, v.y, v.z) - V));
+        j += m*s*s;
+    }
+    if (j == 0)
+        return true;  // all atoms at the centre: nothing to rotate
+    const mixed uw = dot(u, w);
+    const mixed discriminant = uw*uw - dot(w, w) + j*j;
+    if (!(discriminant >= 0))
+        return false;  // no rotation satisfies the condition (step far too large), or not finite
+    mixed3 p = (w + (-uw + sqrt(discriminant))*u)*(1/j);
+    p *= 1/sqrt(dot(p, p));
+    const mixed c = dot(u, p);
+    if (!(c > -1 + 1e-6f))
+        return false;
+    // K + K^2/(1+c), K = [u x p]
+    const mixed3 n = cross(u, p);
+    Matrix3 K;
+    K.m00 = 0; K.m01 = -n.z; K.m02 = n.y;
+    K.m10 = n.z; K.m11 = 0; K.m12 = -n.x;
+    K.m20 = -n.y; K.m21 = n.x; K.m22 = 0;
+    const Matrix3 K2 = multiply(K, K);
+    const mixed f = 1/(1 + c);
+    delta->m00 = K.m00+f*K2.m00; delta->m01 = K.m01+f*K2.m01; delta->m02 = K.m02+f*K2.m02;
+    delta->m10 = K.m10+f*K2.m10; delta->m11 = K.m11+f*K2.m11; delta->m12 = K.m12+f*K2.m12;
+    delta->m20 = K.m20+f*K2.m20; delta->m21 = K.m21+f*K2.m21; delta->m22 = K.m22+f*K2.m22;
+    return true;
+}
+
+/**
  * M-RATTLE's position reset, one work item per body: the centre moves with the mean
  * velocity, the orientation is the rotation that makes the constraint displacement exert
  * zero torque about the old positions. Positions are taken relative to the body's first
@@ -237,74 +309,16 @@ KERNEL void resetBodies(int numBodies, GLOBAL const int* RESTRICT bodyStart, GLO
         const int start = bodyStart[body], end = bodyStart[body+1];
         mixed3 origin, center, V;
         bodyCenterAndVelocity(start, end, bodyAtoms, posq, posqCorrection, newVelocity, &origin, &center, &V);
-        Matrix3 delta = zeroMatrix();
-        bool converged = (dot(V, V) <= 1e30f && dot(center, center) <= 1e30f);  // false for inf and NaN
-        if (converged) {
-        if (bodyLinear[body] == 0) {
-            Matrix3 J = zeroMatrix();
-            mixed3 target = make_mixed3(0, 0, 0);
-            for (int k = start; k < end; k++) {
-                const int atom = bodyAtoms[k];
-                const mixed4 v = newVelocity[atom];
-                const mixed m = 1/v.w;
-                const mixed3 a = loadPosition(posq, posqCorrection, atom) - origin - center;
-                addOuter(&J, m, a);
-                target += m*cross(a, h*(make_mixed3(v.x, v.y, v.z) - V));
-            }
-            converged = solveRotation(J, target, &delta);
+        if (!(dot(V, V) <= 1e30f && dot(center, center) <= 1e30f)) {  // inf or NaN
+            recordFailure(failure, step);
+            continue;
         }
-        else {
-            // Closed form: u x (j p - w) = 0 with p = P u, spin about the axis no freedom.
-            mixed3 u = make_mixed3(0, 0, 0);
-            mixed farthest = -1;
-            for (int k = start; k < end; k++) {
-                const mixed3 a = loadPosition(posq, posqCorrection, bodyAtoms[k]) - origin - center;
-                const mixed r2 = dot(a, a);
-                if (r2 > farthest) {
-                    farthest = r2;
-                    u = a;
-                }
-            }
-            const mixed length = sqrt(farthest);
-            u = (length > 0 ? u*(1/length) : make_mixed3(1, 0, 0));
-            mixed3 w = make_mixed3(0, 0, 0);
-            mixed j = 0;
-            for (int k = start; k < end; k++) {
-                const int atom = bodyAtoms[k];
-                const mixed4 v = newVelocity[atom];
-                const mixed m = 1/v.w;
-                const mixed3 a = loadPosition(posq, posqCorrection, atom) - origin - center;
-                const mixed s = dot(a, u);
-                w += (m*s)*(a + h*(make_mixed3(v.x, v.y, v.z) - V));
-                j += m*s*s;
-            }
-            if (j > 0) {
-                const mixed uw = dot(u, w);
-                const mixed discriminant = uw*uw - dot(w, w) + j*j;
-                if (!(discriminant >= 0))
-                    converged = false;
-                else {
-                    mixed3 p = (w + (-uw + sqrt(discriminant))*u)*(1/j);
-                    p *= 1/sqrt(dot(p, p));
-                    const mixed c = dot(u, p);
-                    if (!(c > -1 + 1e-6f))
-                        converged = false;
-                    else {
-                        const mixed3 n = cross(u, p);
-                        Matrix3 K;
-                        K.m00 = 0; K.m01 = -n.z; K.m02 = n.y;
-                        K.m10 = n.z; K.m11 = 0; K.m12 = -n.x;
-                        K.m20 = -n.y; K.m21 = n.x; K.m22 = 0;
-                        Matrix3 K2 = multiply(K, K);
-                        const mixed f = 1/(1 + c);
-                        delta.m00 = K.m00+f*K2.m00; delta.m01 = K.m01+f*K2.m01; delta.m02 = K.m02+f*K2.m02;
-                        delta.m10 = K.m10+f*K2.m10; delta.m11 = K.m11+f*K2.m11; delta.m12 = K.m12+f*K2.m12;
-                        delta.m20 = K.m20+f*K2.m20; delta.m21 = K.m21+f*K2.m21; delta.m22 = K.m22+f*K2.m22;
-                    }
-                }
-            }
-        }
-        }
+        Matrix3 delta;
+        const bool converged = (bodyLinear[body] == 0 ?
+                solveBodyRotation(start, end, bodyAtoms, posq, posqCorrection, newVelocity, origin, center, V, h,
+                                  &delta) :
+                solveLinearBodyRotation(start, end, bodyAtoms, posq, posqCorrection, newVelocity, origin, center, V,
+                                        h, &delta));
         if (!converged) {
             recordFailure(failure, step);
             continue;
