@@ -204,9 +204,11 @@ double continuedRunDifference(TestRun& run, bool expectBitwise) {
         expectSameState(uninterrupted, continued);
         EXPECT_TRUE(sameBits(energy, run.context->getState(State::Energy).getPotentialEnergy()));
     }
-    // The run really moved: the test compares trajectories, not a frozen state.
+    // The run really moved: the test compares trajectories, not a frozen state. (Over all
+    // atoms: the thermostat's seed is random, and one coordinate can by chance end near its
+    // start; 100 steps at 300 K move atoms by a tenth of a nanometre.)
     EXPECT_EQ(StepsBefore + StepsAfter, uninterrupted.stepCount);
-    EXPECT_GT(std::fabs(uninterrupted.positions[0][0] - run.cluster.positions[0][0]), 1e-4);
+    EXPECT_GT(maxDeviation(uninterrupted.positions, run.cluster.positions), 1e-2);
     return maxDeviation(uninterrupted.positions, continued.positions);
 }
 
