@@ -312,14 +312,40 @@ RotationSolve resetBodyPositions(const BodyView& body, const double* oldPosition
     return solve;
 }
 
-RotationSolve driftAndResetBody(const BodyView& body, double stepSize, const double* positions, double* velocities,
-                                double* newPositions) {
+namespace {
+
+/**
+ * An atom's velocity with a kick applied, as a separate pass would have stored it
+ * (v + f * (time / m)); velocities as they are if there are no forces.
+ */
+class KickedVelocity {
+public:
+    KickedVelocity(const Kick& kick, const double* velocities) : kick(kick), velocities(velocities) {
+    }
+    Vector3d operator()(int atom) const {
+        const double* v = velocities + 3 * atom;
+        if (kick.forces == nullptr)
+            return Vector3d(v[0], v[1], v[2]);
+        const double* f = kick.forces + 3 * atom;
+        const double scale = kick.time * kick.inverseMasses[atom];
+        return Vector3d(v[0] + f[0] * scale, v[1] + f[1] * scale, v[2] + f[2] * scale);
+    }
+
+private:
+    const Kick& kick;
+    const double* velocities;
+};
+
+/** driftAndResetBody with each atom's velocity from velocity(atom); writes newVelocities. */
+template <class Velocity>
+RotationSolve driftAndResetWith(const BodyView& body, double stepSize, const double* positions, Velocity velocity,
+                                double* newPositions, double* newVelocities) {
     // Centre and centre-of-mass velocity in one pass (the same sums as centerOfMass's).
     Vector3d massPosition = Vector3d::Zero(), momentum = Vector3d::Zero();
     for (int k = 0; k < body.numAtoms; k++) {
         const double m = body.masses[body.atoms[k]];
         massPosition += m * point(positions, body.atoms[k]);
-        momentum += m * point(velocities, body.atoms[k]);
+        momentum += m * velocity(body.atoms[k]);
     }
     const Vector3d center = massPosition / body.totalMass;
     const Vector3d V = momentum / body.totalMass;
@@ -327,7 +353,7 @@ RotationSolve driftAndResetBody(const BodyView& body, double stepSize, const dou
         return RotationSolve();  // not converged: nothing is written
     // The drift moves atom i by h v_i; relative to the centres that is h (v_i - V).
     RotationSolve solve = solveBodyRotation(body, positions, center, [&](int atom) -> Vector3d {
-        return stepSize * (point(velocities, atom) - V);
+        return stepSize * (velocity(atom) - V);
     });
     if (!solve.converged)
         return solve;
@@ -346,12 +372,26 @@ RotationSolve driftAndResetBody(const BodyView& body, double stepSize, const dou
         y[0] = x[0] + (s0 + r0);
         y[1] = x[1] + (s1 + r1);
         y[2] = x[2] + (s2 + r2);
-        double* v = velocities + 3 * atom;
+        double* v = newVelocities + 3 * atom;
         v[0] = V[0] + r0 * inverseStep;
         v[1] = V[1] + r1 * inverseStep;
         v[2] = V[2] + r2 * inverseStep;
     }
     return solve;
+}
+
+} // namespace
+
+RotationSolve driftAndResetBody(const BodyView& body, double stepSize, const double* positions, double* velocities,
+                                double* newPositions) {
+    // In place: the last pass, which writes velocities, no longer reads them.
+    return driftAndResetWith(body, stepSize, positions, [&](int atom) -> Vector3d { return point(velocities, atom); },
+                             newPositions, velocities);
+}
+
+RotationSolve kickDriftAndResetBody(const BodyView& body, const Kick& kick, double stepSize, const double* positions,
+                                    const double* velocities, double* newPositions, double* newVelocities) {
+    return driftAndResetWith(body, stepSize, positions, KickedVelocity(kick, velocities), newPositions, newVelocities);
 }
 
 namespace {
@@ -361,7 +401,8 @@ struct RigidMotion {
     Vector3d center, velocity, omega;
 };
 
-RigidMotion nearestRigidMotion(const BodyView& body, const double* positions, const double* velocities) {
+template <class Velocity>
+RigidMotion nearestRigidMotionWith(const BodyView& body, const double* positions, Velocity velocity) {
     // One pass, about the body's first atom (not the origin, so the sums lose no digits to
     // a body far from it): M c' = sum m a, p = sum m v, S = sum m a a^T, l = sum m a x v with
     // a = x - x_first; then J = S - M c' c'^T and L = l - c' x p about the centre.
@@ -373,7 +414,7 @@ RigidMotion nearestRigidMotion(const BodyView& body, const double* positions, co
         const int atom = body.atoms[k];
         const double m = body.masses[atom];
         const double* x = positions + 3 * atom;
-        const double* v = velocities + 3 * atom;
+        const Vector3d v = velocity(atom);
         const double a0 = x[0] - o0, a1 = x[1] - o1, a2 = x[2] - o2;
         const double b0 = m * a0, b1 = m * a1, b2 = m * a2;
         ma0 += b0; ma1 += b1; ma2 += b2;
@@ -403,10 +444,12 @@ RigidMotion nearestRigidMotion(const BodyView& body, const double* positions, co
     return motion;
 }
 
-} // namespace
+RigidMotion nearestRigidMotion(const BodyView& body, const double* positions, const double* velocities) {
+    return nearestRigidMotionWith(body, positions, [&](int atom) -> Vector3d { return point(velocities, atom); });
+}
 
-void projectBodyVelocities(const BodyView& body, const double* positions, double* velocities) {
-    const RigidMotion motion = nearestRigidMotion(body, positions, velocities);
+/** Replace the body's atom velocities by the rigid motion's. */
+void setRigidVelocities(const BodyView& body, const RigidMotion& motion, const double* positions, double* velocities) {
     const double c0 = motion.center[0], c1 = motion.center[1], c2 = motion.center[2];
     const double u0 = motion.velocity[0], u1 = motion.velocity[1], u2 = motion.velocity[2];
     const double w0 = motion.omega[0], w1 = motion.omega[1], w2 = motion.omega[2];
@@ -419,6 +462,17 @@ void projectBodyVelocities(const BodyView& body, const double* positions, double
         v[1] = u1 + (w2 * a0 - w0 * a2);
         v[2] = u2 + (w0 * a1 - w1 * a0);
     }
+}
+
+} // namespace
+
+void projectBodyVelocities(const BodyView& body, const double* positions, double* velocities) {
+    setRigidVelocities(body, nearestRigidMotion(body, positions, velocities), positions, velocities);
+}
+
+void kickAndProjectBodyVelocities(const BodyView& body, const Kick& kick, const double* positions, double* velocities) {
+    const RigidMotion motion = nearestRigidMotionWith(body, positions, KickedVelocity(kick, velocities));
+    setRigidVelocities(body, motion, positions, velocities);
 }
 
 double nonRigidVelocityFraction(const BodyView& body, const double* positions, const double* velocities) {

@@ -103,11 +103,33 @@ RotationSolve driftAndResetBody(const BodyView& body, double stepSize, const dou
                                 double* newPositions);
 
 /**
+ * A velocity Verlet kick folded into a body's passes over its atoms: each atom's velocity is
+ * read as v + f (time / m), the arithmetic of a separate kick, without a pass of its own.
+ * With no forces there is no kick.
+ */
+struct Kick {
+    const double* forces = nullptr;         // 3 per particle, like positions
+    const double* inverseMasses = nullptr;  // 1 per particle
+    double time = 0;
+};
+
+/**
+ * The kick, then driftAndResetBody, in the same passes: velocities (not modified) hold v_i
+ * before the kick; newVelocities receives what driftAndResetBody leaves in velocities.
+ * Nothing is written if the solve does not converge.
+ */
+RotationSolve kickDriftAndResetBody(const BodyView& body, const Kick& kick, double stepSize, const double* positions,
+                                    const double* velocities, double* newPositions, double* newVelocities);
+
+/**
  * RATTLE's velocity step for one body: replace the body's atom velocities by their
  * mass-weighted projection onto rigid-body motion at the given positions,
  * v_i = V + w x a_i with V the centre-of-mass velocity and w = I^-1 L.
  */
 void projectBodyVelocities(const BodyView& body, const double* positions, double* velocities);
+
+/** The kick, then projectBodyVelocities, in the same passes (the kicked velocities are not stored). */
+void kickAndProjectBodyVelocities(const BodyView& body, const Kick& kick, const double* positions, double* velocities);
 
 /**
  * How far a body's velocities are from rigid-body motion: the largest distance of an atom's

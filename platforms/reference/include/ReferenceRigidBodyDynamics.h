@@ -42,6 +42,8 @@ public:
     }
     /** The numerical core's view of one body. */
     RigidBodyMath::BodyView view(int body) const;
+    /** The core's kick by these forces (none if null) over this time. */
+    RigidBodyMath::Kick kickOf(const std::vector<OpenMM::Vec3>* forces, double time) const;
     /**
      * Use this many threads for the per-body work (the CPU platform's Threads). Each body is
      * computed the same way whichever thread takes it, so results do not depend on it.
@@ -147,6 +149,11 @@ private:
 inline double* coordinates(std::vector<OpenMM::Vec3>& v) {
     static_assert(sizeof(OpenMM::Vec3) == 3 * sizeof(double), "Vec3 must be three packed doubles");
     return reinterpret_cast<double*>(v.data());
+}
+
+inline const double* coordinates(const std::vector<OpenMM::Vec3>& v) {
+    static_assert(sizeof(OpenMM::Vec3) == 3 * sizeof(double), "Vec3 must be three packed doubles");
+    return reinterpret_cast<const double*>(v.data());
 }
 
 } // namespace MRattlePlugin

@@ -86,6 +86,16 @@ RigidBodyMath::BodyView ReferenceRigidBodyDynamics::view(int body) const {
                                    shapes[body] != RigidBodyMath::Shape::General};
 }
 
+RigidBodyMath::Kick ReferenceRigidBodyDynamics::kickOf(const vector<Vec3>* forces, double time) const {
+    RigidBodyMath::Kick kick;
+    if (forces != nullptr) {
+        kick.forces = coordinates(*forces);
+        kick.inverseMasses = inverseMass.data();
+        kick.time = time;
+    }
+    return kick;
+}
+
 void ReferenceRigidBodyDynamics::setThreads(int count) {
     numThreads = std::max(count, 1);
     if (numThreads > 1)
@@ -187,17 +197,18 @@ void ReferenceRigidBodyDynamics::driftAndReset(vector<Vec3>& x, const vector<Vec
         newPositions[i] = (inverseMass[i] != 0 ? x[i] + newVelocities[i] * h : x[i]);
     }
     // One parallel region: free particles' drifts (their velocities come from the constrained
-    // displacement below), and each body's kick, drift and reset (driftAndResetBody writes the
-    // body's positions and velocities, formed from displacements).
+    // displacement below), and each body's kick, drift and reset in the same passes over its
+    // atoms (the body's new positions and velocities are formed from displacements).
     const vector<int>& freeParticles = bodies.getFreeParticles();
     const double* oldPositions = coordinates(x);
-    double* velocities = coordinates(newVelocities);
+    const double* oldVelocities = coordinates(v);
+    double* velocitiesOut = coordinates(newVelocities);
     double* positionsOut = coordinates(newPositions);
+    const RigidBodyMath::Kick kick = kickOf(forces, kickTime);
     const int failed = forEachBodyAndFreeParticle(
         [&](int b) {
-            for (int i : bodies.getBodyParticles(b))
-                newVelocities[i] = kicked(i);
-            return RigidBodyMath::driftAndResetBody(view(b), h, oldPositions, velocities, positionsOut).converged;
+            return RigidBodyMath::kickDriftAndResetBody(view(b), kick, h, oldPositions, oldVelocities, positionsOut,
+                                                        velocitiesOut).converged;
         },
         [&](int begin, int end) {
             for (int k = begin; k < end; k++) {
@@ -261,15 +272,15 @@ void ReferenceRigidBodyDynamics::kickAndProject(ContextImpl& context, double ste
     };
     for (int i : otherParticles)
         kick(i);
-    // One parallel region: free particles' kicks, and each body's kick and projection.
+    // One parallel region: free particles' kicks, and each body's kick and projection in the
+    // same passes over its atoms.
     const vector<int>& freeParticles = bodies.getFreeParticles();
     const double* xs = coordinates(x);
     double* vs = coordinates(v);
+    const RigidBodyMath::Kick bodyKick = kickOf(&f, halfStep);
     forEachBodyAndFreeParticle(
         [&](int b) {
-            for (int i : bodies.getBodyParticles(b))
-                kick(i);
-            RigidBodyMath::projectBodyVelocities(view(b), xs, vs);
+            RigidBodyMath::kickAndProjectBodyVelocities(view(b), bodyKick, xs, vs);
             return true;
         },
         [&](int begin, int end) {
