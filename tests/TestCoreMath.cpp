@@ -246,3 +246,50 @@ TEST(CoreMath, RotationFromVector) {
         EXPECT_LT((R - expected.toRotationMatrix()).norm(), 1e-14);
     }
 }
+
+TEST(CoreMath, FoldedKicksEqualASeparateKickPass) {
+    // Kick passes folded into the reset's and the projection's passes give bit for bit what
+    // a kick pass of its own followed by driftAndResetBody / projectBodyVelocities gives.
+    for (bool linear : {false, true}) {
+        SampleBody b = linear ? linearBody() : asymmetricBody();
+        vector<double> unused;
+        randomize(b, 17, 0, unused);
+        projectBodyVelocities(b.view(linear), b.x.data(), b.v.data());  // a rigid start
+        std::mt19937 generator(3);
+        std::normal_distribution<double> gaussian(0.0, 1.0);
+        vector<double> forces(b.x.size()), inverseMasses;
+        for (double& f : forces)
+            f = 500 * gaussian(generator);
+        for (double m : b.masses)
+            inverseMasses.push_back(1.0 / m);
+        Kick kick;
+        kick.forces = forces.data();
+        kick.inverseMasses = inverseMasses.data();
+        kick.time = 0.001;
+        auto kickedSeparately = [&](vector<double> v) {
+            for (int i : b.atoms)
+                for (int d = 0; d < 3; d++)
+                    v[3 * i + d] = v[3 * i + d] + forces[3 * i + d] * (kick.time * inverseMasses[i]);
+            return v;
+        };
+        BodyView body = b.view(linear);
+        // Kick, drift and reset.
+        vector<double> separateV = kickedSeparately(b.v), separateX(b.x.size()), foldedV(b.v.size()), foldedX(b.x.size());
+        ASSERT_TRUE(driftAndResetBody(body, 0.002, b.x.data(), separateV.data(), separateX.data()).converged);
+        ASSERT_TRUE(kickDriftAndResetBody(body, kick, 0.002, b.x.data(), b.v.data(), foldedX.data(), foldedV.data()).converged);
+        EXPECT_EQ(separateX, foldedX) << linear;
+        EXPECT_EQ(separateV, foldedV) << linear;
+        EXPECT_NE(separateV, b.v);  // the kick and the step changed them
+        // Kick and projection.
+        vector<double> projected = kickedSeparately(b.v), folded = b.v;
+        projectBodyVelocities(body, b.x.data(), projected.data());
+        kickAndProjectBodyVelocities(body, kick, b.x.data(), folded.data());
+        EXPECT_EQ(projected, folded) << linear;
+        // No forces: no kick.
+        vector<double> still = b.v, unkicked(b.v.size()), positions(b.x.size()), reference = b.v;
+        ASSERT_TRUE(kickDriftAndResetBody(body, Kick(), 0.002, b.x.data(), still.data(), positions.data(), unkicked.data()).converged);
+        ASSERT_TRUE(driftAndResetBody(body, 0.002, b.x.data(), reference.data(), separateX.data()).converged);
+        EXPECT_EQ(reference, unkicked) << linear;
+        EXPECT_EQ(still, b.v);  // the input velocities are not written
+    }
+}
