@@ -2,7 +2,8 @@
  * Micro-benchmarks of the numerical core, per body of k atoms (k = 3, 5, 12, 30):
  *  - MRattlePositionUpdate: RigidBodyMath::driftAndResetBody, what the kernels do to a
  *    body's positions each step: drift x + h v, M-RATTLE position reset (the rotation
- *    solve), v = (x_new - x) / h.
+ *    solve), v = (x_new - x) / h. MRattlePositionUpdateFourAtATime: the same through
+ *    kickDriftAndResetBodies, as the kernels call it (rotation solves in SIMD lanes).
  *  - SplittingPositionUpdate: the splitting baseline's position half step for the same
  *    body (momenta from velocities, principal frame, free rotor, new x and v).
  *  - ProjectBodyVelocities: the velocity reset (RATTLE's velocity step), shared by both.
@@ -82,6 +83,26 @@ void MRattlePositionUpdate(benchmark::State& state) {
             benchmark::DoNotOptimize(solve.iterations);
         }
         std::swap(batch.positions, batch.scratchPositions);
+    }
+    perBodyCounter(state);
+}
+
+void MRattlePositionUpdateFourAtATime(benchmark::State& state) {
+    // What the CPU and Reference kernels run: RigidBodyMath::kickDriftAndResetBodies, whose
+    // rotation solves share SIMD lanes four bodies at a time (no kick here).
+    Batch batch(state.range(0));
+    std::vector<RigidBodyMath::BodyView> views;
+    for (int b = 0; b < BatchSize; b++)
+        views.push_back(batch.view(b));
+    const RigidBodyMath::Kick noKick;
+    for (auto _ : state) {
+        int failed = RigidBodyMath::kickDriftAndResetBodies(views.data(), BatchSize, noKick, StepSize,
+                                                            batch.positions.data(), batch.velocities.data(),
+                                                            batch.scratchPositions.data(),
+                                                            batch.scratchVelocities.data());
+        benchmark::DoNotOptimize(failed);
+        std::swap(batch.positions, batch.scratchPositions);
+        std::swap(batch.velocities, batch.scratchVelocities);
     }
     perBodyCounter(state);
 }
@@ -179,6 +200,7 @@ void FreeRotorStep(benchmark::State& state) {
 } // namespace
 
 BENCHMARK(MRattlePositionUpdate)->ArgName("k")->Arg(3)->Arg(5)->Arg(12)->Arg(30);
+BENCHMARK(MRattlePositionUpdateFourAtATime)->ArgName("k")->Arg(3)->Arg(5)->Arg(12)->Arg(30);
 BENCHMARK(SplittingPositionUpdate)->ArgName("k")->Arg(3)->Arg(5)->Arg(12)->Arg(30);
 BENCHMARK(ProjectBodyVelocities)->ArgName("k")->Arg(3)->Arg(5)->Arg(12)->Arg(30);
 BENCHMARK(SolveResetRotation)->ArgName("k")->Arg(3)->Arg(5)->Arg(12)->Arg(30);

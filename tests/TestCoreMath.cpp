@@ -3,6 +3,7 @@
  * orthogonality, the zero-torque condition it stands for), the velocity projection
  * (idempotent, momentum-preserving, rigid) and linear bodies.
  */
+#include "mrattle/Coordinates.h"
 #include "mrattle/RigidBodyMath.h"
 #include <gtest/gtest.h>
 #include <cmath>
@@ -291,5 +292,73 @@ TEST(CoreMath, FoldedKicksEqualASeparateKickPass) {
         ASSERT_TRUE(driftAndResetBody(body, 0.002, b.x.data(), reference.data(), separateX.data()).converged);
         EXPECT_EQ(reference, unkicked) << linear;
         EXPECT_EQ(still, b.v);  // the input velocities are not written
+    }
+}
+
+TEST(CoreMath, BodiesSolvedTogetherEqualBodiesSolvedAlone) {
+    // kickDriftAndResetBodies solves four bodies' rotations at a time (in SIMD lanes where the
+    // CPU has AVX2); every body must come out bit for bit as kickDriftAndResetBody leaves it,
+    // whatever its neighbours, and the first failing body must be the one reported.
+    const int numBodies = 11;   // blocks of 4, 4 and 3
+    SampleBody shape = asymmetricBody(), rod = linearBody();
+    vector<int> atoms;
+    vector<double> masses, x, v;
+    vector<BodyView> views;
+    vector<vector<int> > members;
+    std::mt19937 generator(9);
+    std::normal_distribution<double> gaussian(0.0, 1.0);
+    for (int b = 0; b < numBodies; b++) {
+        const SampleBody& s = (b == 5 ? rod : shape);   // one linear body among them
+        vector<int> body;
+        for (size_t i = 0; i < s.atoms.size(); i++) {
+            body.push_back(masses.size());
+            masses.push_back(s.masses[i]);
+            for (int d = 0; d < 3; d++) {
+                x.push_back(s.x[3 * i + d] + 0.7 * b);
+                v.push_back((b % 3 + 1) * gaussian(generator));   // different rotations per body
+            }
+        }
+        members.push_back(body);
+    }
+    for (int b = 0; b < numBodies; b++) {
+        const SampleBody& s = (b == 5 ? rod : shape);
+        views.push_back(BodyView{members[b].data(), (int) members[b].size(), masses.data(), s.total, b == 5});
+    }
+    vector<double> forces(x.size()), inverseMasses;
+    for (double& f : forces)
+        f = 300 * gaussian(generator);
+    for (double m : masses)
+        inverseMasses.push_back(1.0 / m);
+    Kick kick;
+    kick.forces = forces.data();
+    kick.inverseMasses = inverseMasses.data();
+    kick.time = 0.001;
+    for (int failing : {-1, 6, 10}) {   // none, then a body in the second and in the last block
+        vector<double> velocities = v;
+        if (failing >= 0) {   // 200 rad/ps about z through its first atom: 2 rad in a 0.01 ps step
+            const Vector3d pivot = MRattlePlugin::point(x.data(), members[failing][0]);
+            for (int atom : members[failing])
+                MRattlePlugin::point(velocities.data(), atom) = Vector3d(0, 0, 200).cross(MRattlePlugin::point(x.data(), atom) - pivot);
+        }
+        const double h = failing >= 0 ? 0.01 : 0.002;
+        vector<double> alonePositions(x.size(), 0.0), aloneVelocities(x.size(), 0.0);
+        int aloneFailure = numBodies;
+        for (int b = 0; b < numBodies && aloneFailure == numBodies; b++)
+            if (!kickDriftAndResetBody(views[b], kick, h, x.data(), velocities.data(), alonePositions.data(),
+                                       aloneVelocities.data()).converged)
+                aloneFailure = b;
+        vector<double> togetherPositions(x.size(), 0.0), togetherVelocities(x.size(), 0.0);
+        const int togetherFailure = kickDriftAndResetBodies(views.data(), numBodies, kick, h, x.data(), velocities.data(),
+                                                            togetherPositions.data(), togetherVelocities.data());
+        EXPECT_EQ(failing >= 0 ? failing : numBodies, aloneFailure);
+        EXPECT_EQ(aloneFailure, togetherFailure);
+        // Every body before the failure is written the same way, bit for bit.
+        for (int b = 0; b < aloneFailure; b++)
+            for (int atom : members[b])
+                for (int d = 0; d < 3; d++) {
+                    EXPECT_EQ(alonePositions[3 * atom + d], togetherPositions[3 * atom + d]) << b;
+                    EXPECT_EQ(aloneVelocities[3 * atom + d], togetherVelocities[3 * atom + d]) << b;
+                }
+        EXPECT_NE(alonePositions[3 * members[0][0]], 0.0);   // written
     }
 }

@@ -1,5 +1,6 @@
 #include "mrattle/RigidBodyMath.h"
 #include "mrattle/Coordinates.h"
+#include "TorqueCondition.h"
 #include <algorithm>
 #include <cmath>
 #include <limits>
@@ -167,81 +168,10 @@ RotationSolve solveResetRotation(const Matrix3d& J, const Matrix3d& Y) {
 
 namespace {
 
-RotationSolve solveTorqueCondition(const SecondMoment& J, const Vector3d& target) {
-    // P is parametrised by its half Gibbs vector w (tan of half the angle along the axis):
-    // P - 1 = c ([w]x + [w]x^2), c = 2 / (1 + |w|^2), orthogonal to round-off for any w and
-    // formed without the identity, so a small rotation keeps its digits. With I = tr(J) - J,
-    // vex(D J - J D^T) = c (I w + (J w) x w) for D = P - 1, and the condition times 1/c is
-    // the quadratic F(w) = I w + (J w) x w - (1 + |w|^2) target / 2 = 0, solved with
-    // 3-vector algebra and closed-form 3x3 inverses (scalar code: Eigen's fixed-size
-    // expressions cost several times more here).
-    RotationSolve result;
-    result.iterations = MaxRotationIterations;
-    const Inertia inertia(J);
-    const double j00 = J.j00, j01 = J.j01, j02 = J.j02, j11 = J.j11, j12 = J.j12, j22 = J.j22;
-    const double traceJ = inertia.traceJ, i00 = inertia.i00, i11 = inertia.i11, i22 = inertia.i22;
-    const double t0 = 0.5 * target[0], t1 = 0.5 * target[1], t2 = 0.5 * target[2];
-    // At w = 0 the Jacobian is the inertia: the first iterate is the linearised answer.
-    const Vector3d linear = inertia.solve(t0, t1, t2);
-    double w0 = linear[0], w1 = linear[1], w2 = linear[2];
-    // Newton while far from the root; near it the Jacobian is kept (a chord step), whose
-    // error shrinks by about the previous correction's relative size: a thermal step needs
-    // the linear solve, one Jacobian and two residuals.
-    double g[9];   // inverse Jacobian, row-major
-    bool newJacobian = true;
-    double previousStep = std::sqrt(w0 * w0 + w1 * w1 + w2 * w2);
-    for (int iteration = 1; iteration < MaxRotationIterations; iteration++) {
-        const double jw0 = j00 * w0 + j01 * w1 + j02 * w2;
-        const double jw1 = j01 * w0 + j11 * w1 + j12 * w2;
-        const double jw2 = j02 * w0 + j12 * w1 + j22 * w2;
-        const double scale = 1.0 + w0 * w0 + w1 * w1 + w2 * w2;
-        // F = I w + (J w) x w - (1 + |w|^2) target / 2, with I w = tr(J) w - J w.
-        const double f0 = traceJ * w0 - jw0 + (jw1 * w2 - jw2 * w1) - scale * t0;
-        const double f1 = traceJ * w1 - jw1 + (jw2 * w0 - jw0 * w2) - scale * t1;
-        const double f2 = traceJ * w2 - jw2 + (jw0 * w1 - jw1 * w0) - scale * t2;
-        if (newJacobian) {
-            // G = dF/dw = I - [w]x J + [J w]x - 2 t w^T (t = target / 2); ([w]x J)(r,c) = (w x J_c)_r.
-            const double a00 = i00 - (w1 * j02 - w2 * j01) - 2 * t0 * w0;
-            const double a01 = -j01 - (w1 * j12 - w2 * j11) - jw2 - 2 * t0 * w1;
-            const double a02 = -j02 - (w1 * j22 - w2 * j12) + jw1 - 2 * t0 * w2;
-            const double a10 = -j01 - (w2 * j00 - w0 * j02) + jw2 - 2 * t1 * w0;
-            const double a11 = i11 - (w2 * j01 - w0 * j12) - 2 * t1 * w1;
-            const double a12 = -j12 - (w2 * j02 - w0 * j22) - jw0 - 2 * t1 * w2;
-            const double a20 = -j02 - (w0 * j01 - w1 * j00) - jw1 - 2 * t2 * w0;
-            const double a21 = -j12 - (w0 * j11 - w1 * j01) + jw0 - 2 * t2 * w1;
-            const double a22 = i22 - (w0 * j12 - w1 * j02) - 2 * t2 * w2;
-            const double b00 = a11 * a22 - a12 * a21, b01 = a02 * a21 - a01 * a22, b02 = a01 * a12 - a02 * a11;
-            const double b10 = a12 * a20 - a10 * a22, b11 = a00 * a22 - a02 * a20, b12 = a02 * a10 - a00 * a12;
-            const double b20 = a10 * a21 - a11 * a20, b21 = a01 * a20 - a00 * a21, b22 = a00 * a11 - a01 * a10;
-            const double inverseDet = 1.0 / (a00 * b00 + a01 * b10 + a02 * b20);
-            g[0] = b00 * inverseDet; g[1] = b01 * inverseDet; g[2] = b02 * inverseDet;
-            g[3] = b10 * inverseDet; g[4] = b11 * inverseDet; g[5] = b12 * inverseDet;
-            g[6] = b20 * inverseDet; g[7] = b21 * inverseDet; g[8] = b22 * inverseDet;
-        }
-        const double s0 = g[0] * f0 + g[1] * f1 + g[2] * f2;
-        const double s1 = g[3] * f0 + g[4] * f1 + g[5] * f2;
-        const double s2 = g[6] * f0 + g[7] * f1 + g[8] * f2;
-        w0 -= s0;
-        w1 -= s1;
-        w2 -= s2;
-        const double stepSize = std::sqrt(s0 * s0 + s1 * s1 + s2 * s2);
-        const double size = std::sqrt(w0 * w0 + w1 * w1 + w2 * w2);
-        if (!std::isfinite(size))
-            break;
-        // The error left is about the step times the rate at which steps shrink.
-        if (stepSize * stepSize <= 1e-15 * size * previousStep) {
-            result.iterations = iteration + 1;
-            result.converged = true;
-            break;
-        }
-        newJacobian = !(stepSize <= 1e-3 * size);
-        previousStep = stepSize;
-    }
-    if (!result.converged)
-        return result;
-    // P - 1 = c ([w]x + w w^T - |w|^2).
+/** P - 1 from the solve's Cayley vector w: c ([w]x + w w^T - |w|^2), c = 2 / (1 + |w|^2). */
+void setRotationMinusIdentity(const TorqueCondition::Solution& solution, Matrix3d& D) {
+    const double w0 = solution.w0, w1 = solution.w1, w2 = solution.w2;
     const double w2sum = w0 * w0 + w1 * w1 + w2 * w2, c = 2.0 / (1.0 + w2sum);
-    Matrix3d& D = result.rotationMinusIdentity;
     D(0, 0) = c * (w0 * w0 - w2sum);
     D(1, 1) = c * (w1 * w1 - w2sum);
     D(2, 2) = c * (w2 * w2 - w2sum);
@@ -251,7 +181,16 @@ RotationSolve solveTorqueCondition(const SecondMoment& J, const Vector3d& target
     D(2, 0) = c * (w0 * w2 - w1);
     D(1, 2) = c * (w1 * w2 - w0);
     D(2, 1) = c * (w1 * w2 + w0);
-    result.rotation = D;
+}
+
+RotationSolve rotationSolveOf(const TorqueCondition::Solution& solution) {
+    RotationSolve result;
+    result.iterations = solution.iterations;
+    result.converged = solution.converged;
+    if (!solution.converged)
+        return result;
+    setRotationMinusIdentity(solution, result.rotationMinusIdentity);
+    result.rotation = result.rotationMinusIdentity;
     result.rotation.diagonal().array() += 1.0;
     return result;
 }
@@ -259,7 +198,9 @@ RotationSolve solveTorqueCondition(const SecondMoment& J, const Vector3d& target
 } // namespace
 
 RotationSolve solveResetRotationForTorque(const Matrix3d& J, const Vector3d& target) {
-    return solveTorqueCondition(SecondMoment{J(0, 0), J(0, 1), J(0, 2), J(1, 1), J(1, 2), J(2, 2)}, target);
+    const TorqueCondition::Condition condition{J(0, 0), J(0, 1), J(0, 2), J(1, 1), J(1, 2), J(2, 2),
+                                              target[0], target[1], target[2]};
+    return rotationSolveOf(TorqueCondition::solve(condition, MaxRotationIterations));
 }
 
 namespace {
@@ -269,10 +210,8 @@ namespace {
  * the centres (small: formed without the absolute positions, so no digits are lost).
  */
 template <class Displacement>
-RotationSolve solveBodyRotation(const BodyView& body, const double* oldPositions, const Vector3d& oldCenter,
-                                Displacement displacement) {
-    if (body.linear)
-        return solveLinearRotation(body, oldPositions, oldCenter, displacement);
+TorqueCondition::Condition torqueConditionOf(const BodyView& body, const double* oldPositions,
+                                             const Vector3d& oldCenter, Displacement displacement) {
     // Torque target sum m a x y = sum m a x (y - a). Scalar sums of J's six entries: Eigen's
     // 3x3 outer products cost several times more here.
     const double o0 = oldCenter[0], o1 = oldCenter[1], o2 = oldCenter[2];
@@ -290,7 +229,20 @@ RotationSolve solveBodyRotation(const BodyView& body, const double* oldPositions
         t1 += b2 * d[0] - b0 * d[2];
         t2 += b0 * d[1] - b1 * d[0];
     }
-    return solveTorqueCondition(SecondMoment{j00, j01, j02, j11, j12, j22}, Vector3d(t0, t1, t2));
+    return TorqueCondition::Condition{j00, j01, j02, j11, j12, j22, t0, t1, t2};
+}
+
+/**
+ * The rotation of one body's reset, given each atom's displacement y_i - a_i relative to
+ * the centres (small: formed without the absolute positions, so no digits are lost).
+ */
+template <class Displacement>
+RotationSolve solveBodyRotation(const BodyView& body, const double* oldPositions, const Vector3d& oldCenter,
+                                Displacement displacement) {
+    if (body.linear)
+        return solveLinearRotation(body, oldPositions, oldCenter, displacement);
+    return rotationSolveOf(TorqueCondition::solve(torqueConditionOf(body, oldPositions, oldCenter, displacement),
+                                                  MaxRotationIterations));
 }
 
 } // namespace
@@ -336,10 +288,21 @@ private:
     const double* velocities;
 };
 
-/** driftAndResetBody with each atom's velocity from velocity(atom); writes newVelocities. */
+/**
+ * A body's reset after its first passes: the centre and its velocity, then either the turn
+ * P - 1 (a linear body, solved in closed form) or the torque condition still to solve.
+ */
+struct ResetSetup {
+    Vector3d center, V;
+    bool finite = false, converged = false;
+    TorqueCondition::Condition condition;
+    Matrix3d rotationMinusIdentity;
+    int iterations = 0;
+};
+
+/** The passes before the solve, with each atom's velocity from velocity(atom). */
 template <class Velocity>
-RotationSolve driftAndResetWith(const BodyView& body, double stepSize, const double* positions, Velocity velocity,
-                                double* newPositions, double* newVelocities) {
+void setUpReset(const BodyView& body, double stepSize, const double* positions, Velocity velocity, ResetSetup& setup) {
     // Centre and centre-of-mass velocity in one pass (the same sums as centerOfMass's).
     Vector3d massPosition = Vector3d::Zero(), momentum = Vector3d::Zero();
     for (int k = 0; k < body.numAtoms; k++) {
@@ -347,18 +310,39 @@ RotationSolve driftAndResetWith(const BodyView& body, double stepSize, const dou
         massPosition += m * point(positions, body.atoms[k]);
         momentum += m * velocity(body.atoms[k]);
     }
-    const Vector3d center = massPosition / body.totalMass;
-    const Vector3d V = momentum / body.totalMass;
-    if (!V.allFinite() || !center.allFinite())
-        return RotationSolve();  // not converged: nothing is written
+    setup.center = massPosition / body.totalMass;
+    setup.V = momentum / body.totalMass;
+    setup.finite = setup.V.allFinite() && setup.center.allFinite();
+    setup.converged = false;
+    if (!setup.finite)
+        return;  // not converged: nothing will be written
     // The drift moves atom i by h v_i; relative to the centres that is h (v_i - V).
-    RotationSolve solve = solveBodyRotation(body, positions, center, [&](int atom) -> Vector3d {
-        return stepSize * (velocity(atom) - V);
-    });
-    if (!solve.converged)
-        return solve;
-    const Matrix3d& D = solve.rotationMinusIdentity;
-    const double c0 = center[0], c1 = center[1], c2 = center[2];
+    const Vector3d V = setup.V;
+    auto displacement = [&](int atom) -> Vector3d { return stepSize * (velocity(atom) - V); };
+    if (body.linear) {
+        const RotationSolve solve = solveLinearRotation(body, positions, setup.center, displacement);
+        setup.converged = solve.converged;
+        setup.iterations = solve.iterations;
+        setup.rotationMinusIdentity = solve.rotationMinusIdentity;
+    }
+    else
+        setup.condition = torqueConditionOf(body, positions, setup.center, displacement);
+}
+
+/** Take a general body's solved condition. */
+void takeSolution(const TorqueCondition::Solution& solution, ResetSetup& setup) {
+    setup.converged = solution.converged;
+    setup.iterations = solution.iterations;
+    if (solution.converged)
+        setRotationMinusIdentity(solution, setup.rotationMinusIdentity);
+}
+
+/** The last pass: new positions x + h V + (P - 1) a and velocities V + (P - 1) a / h. */
+void applyReset(const BodyView& body, const ResetSetup& setup, double stepSize, const double* positions,
+                double* newPositions, double* newVelocities) {
+    const Matrix3d& D = setup.rotationMinusIdentity;
+    const Vector3d& V = setup.V;
+    const double c0 = setup.center[0], c1 = setup.center[1], c2 = setup.center[2];
     const double s0 = stepSize * V[0], s1 = stepSize * V[1], s2 = stepSize * V[2];
     const double inverseStep = 1.0 / stepSize;
     for (int k = 0; k < body.numAtoms; k++) {
@@ -377,7 +361,61 @@ RotationSolve driftAndResetWith(const BodyView& body, double stepSize, const dou
         v[1] = V[1] + r1 * inverseStep;
         v[2] = V[2] + r2 * inverseStep;
     }
-    return solve;
+}
+
+/** driftAndResetBody with each atom's velocity from velocity(atom); writes newVelocities. */
+template <class Velocity>
+RotationSolve driftAndResetWith(const BodyView& body, double stepSize, const double* positions, Velocity velocity,
+                                double* newPositions, double* newVelocities) {
+    ResetSetup setup;
+    setUpReset(body, stepSize, positions, velocity, setup);
+    if (!setup.finite)
+        return RotationSolve();
+    if (!body.linear)
+        takeSolution(TorqueCondition::solve(setup.condition, MaxRotationIterations), setup);
+    RotationSolve result;
+    result.converged = setup.converged;
+    result.iterations = setup.iterations;
+    if (!setup.converged)
+        return result;
+    applyReset(body, setup, stepSize, positions, newPositions, newVelocities);
+    result.rotationMinusIdentity = setup.rotationMinusIdentity;
+    result.rotation = setup.rotationMinusIdentity;
+    result.rotation.diagonal().array() += 1.0;
+    return result;
+}
+
+/**
+ * The same for several bodies, four at a time: their first passes, the rotation solves of
+ * the general ones together (TorqueCondition::solveUpToFour), their last passes. Returns
+ * the index of the first body whose reset failed, or count.
+ */
+template <class Velocity>
+int driftAndResetBodiesWith(const BodyView* bodies, int count, double stepSize, const double* positions,
+                            Velocity velocity, double* newPositions, double* newVelocities) {
+    ResetSetup setups[4];
+    TorqueCondition::Condition conditions[4];
+    TorqueCondition::Solution solutions[4];
+    for (int first = 0; first < count; first += 4) {
+        const int n = std::min(4, count - first);
+        int general[4], numGeneral = 0;
+        for (int i = 0; i < n; i++) {
+            setUpReset(bodies[first + i], stepSize, positions, velocity, setups[i]);
+            if (setups[i].finite && !bodies[first + i].linear) {
+                conditions[numGeneral] = setups[i].condition;
+                general[numGeneral++] = i;
+            }
+        }
+        TorqueCondition::solveUpToFour(conditions, numGeneral, solutions, MaxRotationIterations);
+        for (int g = 0; g < numGeneral; g++)
+            takeSolution(solutions[g], setups[general[g]]);
+        for (int i = 0; i < n; i++) {
+            if (!setups[i].converged)
+                return first + i;
+            applyReset(bodies[first + i], setups[i], stepSize, positions, newPositions, newVelocities);
+        }
+    }
+    return count;
 }
 
 } // namespace
@@ -392,6 +430,13 @@ RotationSolve driftAndResetBody(const BodyView& body, double stepSize, const dou
 RotationSolve kickDriftAndResetBody(const BodyView& body, const Kick& kick, double stepSize, const double* positions,
                                     const double* velocities, double* newPositions, double* newVelocities) {
     return driftAndResetWith(body, stepSize, positions, KickedVelocity(kick, velocities), newPositions, newVelocities);
+}
+
+int kickDriftAndResetBodies(const BodyView* bodies, int count, const Kick& kick, double stepSize,
+                            const double* positions, const double* velocities, double* newPositions,
+                            double* newVelocities) {
+    return driftAndResetBodiesWith(bodies, count, stepSize, positions, KickedVelocity(kick, velocities), newPositions,
+                                   newVelocities);
 }
 
 namespace {

@@ -122,6 +122,16 @@ RotationSolve kickDriftAndResetBody(const BodyView& body, const Kick& kick, doub
                                     const double* velocities, double* newPositions, double* newVelocities);
 
 /**
+ * kickDriftAndResetBody for count bodies (no atom in two of them). Their rotation solves
+ * are done four at a time, in the lanes of SIMD registers where the CPU has AVX2; each
+ * body's result is bit for bit the one-body function's. Returns the index of the first body
+ * whose reset failed (bodies before it are written, later ones may be), or count.
+ */
+int kickDriftAndResetBodies(const BodyView* bodies, int count, const Kick& kick, double stepSize,
+                            const double* positions, const double* velocities, double* newPositions,
+                            double* newVelocities);
+
+/**
  * RATTLE's velocity step for one body: replace the body's atom velocities by their
  * mass-weighted projection onto rigid-body motion at the given positions,
  * v_i = V + w x a_i with V the centre-of-mass velocity and w = I^-1 L.

@@ -62,6 +62,12 @@ public:
     int forEachBodyAndFreeParticle(const std::function<bool(int)>& work,
                                    const std::function<void(int, int)>& freeWork);
     /**
+     * The same with work(begin, end) on contiguous ranges of bodies, one per thread, which
+     * returns the first failed body of its range (INT_MAX if none).
+     */
+    int forEachBodyRangeAndFreeParticle(const std::function<int(int, int)>& work,
+                                        const std::function<void(int, int)>& freeWork);
+    /**
      * Call work(begin, end) on contiguous ranges covering every particle, one per thread
      * when there are enough particles to pay for them: for per-atom loops (kicks, drifts)
      * whose atoms are independent, so results do not depend on the threads.

@@ -125,27 +125,32 @@ int ReferenceRigidBodyDynamics::forEachBody(const std::function<bool(int)>& work
 
 int ReferenceRigidBodyDynamics::forEachBodyAndFreeParticle(const std::function<bool(int)>& work,
                                                            const std::function<void(int, int)>& freeWork) {
+    return forEachBodyRangeAndFreeParticle(
+        [&](int begin, int end) {
+            for (int b = begin; b < end; b++)
+                if (!work(b))
+                    return b;
+            return INT_MAX;
+        },
+        freeWork);
+}
+
+int ReferenceRigidBodyDynamics::forEachBodyRangeAndFreeParticle(const std::function<int(int, int)>& work,
+                                                                const std::function<void(int, int)>& freeWork) {
     const int numBodies = bodies.getNumBodies();
     const int numFree = bodies.getFreeParticles().size();
     // A parallel region costs microseconds, a body a fraction of one: only many bodies pay.
     if (numThreads == 1 || numBodies < 256) {
         if (freeWork)
             freeWork(0, numFree);
-        for (int b = 0; b < numBodies; b++)
-            if (!work(b))
-                return b;
-        return INT_MAX;
+        return work(0, numBodies);
     }
     vector<int> firstFailure(numThreads, INT_MAX);
     forEachThread([&](int thread) {
         if (freeWork)
             freeWork((long long) numFree * thread / numThreads, (long long) numFree * (thread + 1) / numThreads);
-        const int begin = (long long) numBodies * thread / numThreads, end = (long long) numBodies * (thread + 1) / numThreads;
-        for (int b = begin; b < end; b++)
-            if (!work(b)) {
-                firstFailure[thread] = b;
-                return;
-            }
+        firstFailure[thread] = work((long long) numBodies * thread / numThreads,
+                                    (long long) numBodies * (thread + 1) / numThreads);
     });
     return *std::min_element(firstFailure.begin(), firstFailure.end());
 }
@@ -205,10 +210,20 @@ void ReferenceRigidBodyDynamics::driftAndReset(vector<Vec3>& x, const vector<Vec
     double* velocitiesOut = coordinates(newVelocities);
     double* positionsOut = coordinates(newPositions);
     const RigidBodyMath::Kick kick = kickOf(forces, kickTime);
-    const int failed = forEachBodyAndFreeParticle(
-        [&](int b) {
-            return RigidBodyMath::kickDriftAndResetBody(view(b), kick, h, oldPositions, oldVelocities, positionsOut,
-                                                        velocitiesOut).converged;
+    const int failed = forEachBodyRangeAndFreeParticle(
+        [&](int begin, int end) {
+            // Four bodies at a time: the core solves their rotations together.
+            for (int first = begin; first < end; first += 4) {
+                RigidBodyMath::BodyView views[4];
+                const int count = std::min(4, end - first);
+                for (int i = 0; i < count; i++)
+                    views[i] = view(first + i);
+                const int failure = RigidBodyMath::kickDriftAndResetBodies(views, count, kick, h, oldPositions,
+                                                                           oldVelocities, positionsOut, velocitiesOut);
+                if (failure < count)
+                    return first + failure;
+            }
+            return INT_MAX;
         },
         [&](int begin, int end) {
             for (int k = begin; k < end; k++) {
