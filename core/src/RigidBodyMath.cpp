@@ -27,32 +27,6 @@ Matrix3d crossMatrix(const Vector3d& w) {
     return m;
 }
 
-/** A body's second moment J = sum m a a^T about its centre, by its six entries. */
-struct SecondMoment {
-    double j00, j01, j02, j11, j12, j22;
-};
-
-/** The inertia I = tr(J) - J of a second moment, formed once for the solves that need it. */
-struct Inertia {
-    explicit Inertia(const SecondMoment& J)
-        : traceJ(J.j00 + J.j11 + J.j22), i00(traceJ - J.j00), i11(traceJ - J.j11), i22(traceJ - J.j22), j01(J.j01),
-          j02(J.j02), j12(J.j12) {
-    }
-    /**
-     * I^-1 b by I's cofactors (I and its adjugate are symmetric). No pivoting: an inertia
-     * tensor needs none; the result is not finite if I is singular.
-     */
-    Vector3d solve(double b0, double b1, double b2) const {
-        const double c00 = i11 * i22 - j12 * j12, c01 = j01 * i22 + j12 * j02, c02 = j01 * j12 + i11 * j02;
-        const double c11 = i00 * i22 - j02 * j02, c12 = i00 * j12 + j01 * j02, c22 = i00 * i11 - j01 * j01;
-        const double inverseDet = 1.0 / (i00 * c00 - j01 * c01 - j02 * c02);
-        return Vector3d(c00 * b0 + c01 * b1 + c02 * b2, c01 * b0 + c11 * b1 + c12 * b2,
-                        c02 * b0 + c12 * b1 + c22 * b2) * inverseDet;
-    }
-    double traceJ, i00, i11, i22;   // the diagonal of I
-    double j01, j02, j12;            // minus its off-diagonal
-};
-
 /** Unit vector along a linear body: the direction of its atom farthest from the centre. */
 Vector3d linearAxis(const BodyView& body, const double* positions, const Vector3d& center) {
     Vector3d farthest = Vector3d::Zero();
@@ -478,13 +452,14 @@ RigidMotion nearestRigidMotionWith(const BodyView& body, const double* positions
     const double j00 = s00 - ma0 * c0, j01 = s01 - ma0 * c1, j02 = s02 - ma0 * c2;
     const double j11 = s11 - ma1 * c1, j12 = s12 - ma1 * c2, j22 = s22 - ma2 * c2;
     const Vector3d L(l0 - (c1 * p2 - c2 * p1), l1 - (c2 * p0 - c0 * p2), l2 - (c0 * p1 - c1 * p0));
-    const Inertia inertia(SecondMoment{j00, j01, j02, j11, j12, j22});
     if (body.linear) {
         // I = j (1 - u u^T): no spin about the axis.
+        const double traceJ = j00 + j11 + j22;
         Vector3d u = linearAxis(body, positions, motion.center);
-        motion.omega = inertia.traceJ > 0 ? Vector3d((L - L.dot(u) * u) / inertia.traceJ) : Vector3d::Zero();
+        motion.omega = traceJ > 0 ? Vector3d((L - L.dot(u) * u) / traceJ) : Vector3d::Zero();
     } else {
-        motion.omega = inertia.solve(L[0], L[1], L[2]);
+        const double j[6] = {j00, j01, j02, j11, j12, j22};
+        TorqueCondition::solveInertia(j, L.data(), motion.omega.data());
     }
     return motion;
 }

@@ -50,6 +50,24 @@ struct Avx2Lanes {
 #endif
 
 /**
+ * x = I^-1 b for the inertia I = tr(J) - J of the second moment j (six entries), by I's
+ * cofactors (I and its adjugate are symmetric). No pivoting: an inertia tensor needs none;
+ * the result is not finite if I is singular.
+ */
+template <class Real>
+MRATTLE_INLINE void inertiaSolve(const Real* j, Real b0, Real b1, Real b2, Real& x0, Real& x1, Real& x2) {
+    const Real j00 = j[0], j01 = j[1], j02 = j[2], j11 = j[3], j12 = j[4], j22 = j[5];
+    const Real traceJ = j00 + j11 + j22;
+    const Real i00 = traceJ - j00, i11 = traceJ - j11, i22 = traceJ - j22;
+    const Real c00 = i11 * i22 - j12 * j12, c01 = j01 * i22 + j12 * j02, c02 = j01 * j12 + i11 * j02;
+    const Real c11 = i00 * i22 - j02 * j02, c12 = i00 * j12 + j01 * j02, c22 = i00 * i11 - j01 * j01;
+    const Real inverseDet = 1.0 / (i00 * c00 - j01 * c01 - j02 * c02);
+    x0 = (c00 * b0 + c01 * b1 + c02 * b2) * inverseDet;
+    x1 = (c01 * b0 + c11 * b1 + c12 * b2) * inverseDet;
+    x2 = (c02 * b0 + c12 * b1 + c22 * b2) * inverseDet;
+}
+
+/**
  * P is parametrised by its half Gibbs vector w (tan of half the angle along the axis):
  * P - 1 = c ([w]x + [w]x^2), c = 2 / (1 + |w|^2), orthogonal to round-off for any w and
  * formed without the identity, so a small rotation keeps its digits. With I = tr(J) - J,
@@ -69,14 +87,9 @@ MRATTLE_INLINE void solveLanes(const typename L::Real* j, const typename L::Real
     const Real traceJ = j00 + j11 + j22;
     const Real i00 = traceJ - j00, i11 = traceJ - j11, i22 = traceJ - j22;   // I = tr(J) - J
     const Real t0 = 0.5 * target[0], t1 = 0.5 * target[1], t2 = 0.5 * target[2];
-    // At w = 0 the Jacobian is the inertia: the first iterate is the linearised answer I^-1 t,
-    // by I's cofactors (I and its adjugate are symmetric).
-    const Real c00 = i11 * i22 - j12 * j12, c01 = j01 * i22 + j12 * j02, c02 = j01 * j12 + i11 * j02;
-    const Real c11 = i00 * i22 - j02 * j02, c12 = i00 * j12 + j01 * j02, c22 = i00 * i11 - j01 * j01;
-    const Real inertiaInverseDet = 1.0 / (i00 * c00 - j01 * c01 - j02 * c02);
-    Real w0 = (c00 * t0 + c01 * t1 + c02 * t2) * inertiaInverseDet;
-    Real w1 = (c01 * t0 + c11 * t1 + c12 * t2) * inertiaInverseDet;
-    Real w2 = (c02 * t0 + c12 * t1 + c22 * t2) * inertiaInverseDet;
+    // At w = 0 the Jacobian is the inertia: the first iterate is the linearised answer I^-1 t.
+    Real w0, w1, w2;
+    inertiaSolve(j, t0, t1, t2, w0, w1, w2);
     Real g0 = Real{}, g1 = g0, g2 = g0, g3 = g0, g4 = g0, g5 = g0, g6 = g0, g7 = g0, g8 = g0;  // G^-1, row-major
     Mask active = L::all(), newJacobian = L::all();
     converged = L::none();
@@ -162,6 +175,10 @@ __attribute__((target("avx2"))) void solveFourLanes(const Condition* conditions,
 #endif
 
 } // namespace
+
+void solveInertia(const double* j, const double* b, double* x) {
+    inertiaSolve(j, b[0], b[1], b[2], x[0], x[1], x[2]);
+}
 
 Solution solve(const Condition& c, int maxIterations) {
     const double j[6] = {c.j00, c.j01, c.j02, c.j11, c.j12, c.j22}, target[3] = {c.t0, c.t1, c.t2};

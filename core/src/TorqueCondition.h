@@ -25,6 +25,12 @@ struct Solution {
     bool converged = false;
 };
 
+/**
+ * x = I^-1 b for the inertia I = tr(J) - J of a second moment j (j00, j01, j02, j11, j12,
+ * j22): the solve's first iterate, and the velocity projection's angular velocity.
+ */
+void solveInertia(const double* j, const double* b, double* x);
+
 /** Solve one condition in at most maxIterations iterations. */
 Solution solve(const Condition& condition, int maxIterations);
 
