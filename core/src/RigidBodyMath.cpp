@@ -420,8 +420,18 @@ struct RigidMotion {
     Vector3d center, velocity, omega;
 };
 
+/**
+ * The sums of the nearest rigid motion: centre and centre velocity; for a general body J
+ * (six entries) and L about the centre, whose I^-1 L is left to the caller; for a linear
+ * body the angular velocity itself.
+ */
+struct MotionSums {
+    RigidMotion motion;
+    double j[6], L[3];
+};
+
 template <class Velocity>
-RigidMotion nearestRigidMotionWith(const BodyView& body, const double* positions, Velocity velocity) {
+void rigidMotionSums(const BodyView& body, const double* positions, Velocity velocity, MotionSums& sums) {
     // One pass, about the body's first atom (not the origin, so the sums lose no digits to
     // a body far from it): M c' = sum m a, p = sum m v, S = sum m a a^T, l = sum m a x v with
     // a = x - x_first; then J = S - M c' c'^T and L = l - c' x p about the centre.
@@ -446,7 +456,7 @@ RigidMotion nearestRigidMotionWith(const BodyView& body, const double* positions
     }
     const double inverseMass = 1.0 / body.totalMass;
     const double c0 = ma0 * inverseMass, c1 = ma1 * inverseMass, c2 = ma2 * inverseMass;
-    RigidMotion motion;
+    RigidMotion& motion = sums.motion;
     motion.center = Vector3d(o0 + c0, o1 + c1, o2 + c2);
     motion.velocity = Vector3d(p0 * inverseMass, p1 * inverseMass, p2 * inverseMass);
     const double j00 = s00 - ma0 * c0, j01 = s01 - ma0 * c1, j02 = s02 - ma0 * c2;
@@ -457,11 +467,19 @@ RigidMotion nearestRigidMotionWith(const BodyView& body, const double* positions
         const double traceJ = j00 + j11 + j22;
         Vector3d u = linearAxis(body, positions, motion.center);
         motion.omega = traceJ > 0 ? Vector3d((L - L.dot(u) * u) / traceJ) : Vector3d::Zero();
-    } else {
-        const double j[6] = {j00, j01, j02, j11, j12, j22};
-        TorqueCondition::solveInertia(j, L.data(), motion.omega.data());
+        return;
     }
-    return motion;
+    sums.j[0] = j00; sums.j[1] = j01; sums.j[2] = j02; sums.j[3] = j11; sums.j[4] = j12; sums.j[5] = j22;
+    sums.L[0] = L[0]; sums.L[1] = L[1]; sums.L[2] = L[2];
+}
+
+template <class Velocity>
+RigidMotion nearestRigidMotionWith(const BodyView& body, const double* positions, Velocity velocity) {
+    MotionSums sums;
+    rigidMotionSums(body, positions, velocity, sums);
+    if (!body.linear)
+        TorqueCondition::solveInertia(sums.j, sums.L, sums.motion.omega.data());
+    return sums.motion;
 }
 
 RigidMotion nearestRigidMotion(const BodyView& body, const double* positions, const double* velocities) {
@@ -493,6 +511,30 @@ void projectBodyVelocities(const BodyView& body, const double* positions, double
 void kickAndProjectBodyVelocities(const BodyView& body, const Kick& kick, const double* positions, double* velocities) {
     const RigidMotion motion = nearestRigidMotionWith(body, positions, KickedVelocity(kick, velocities));
     setRigidVelocities(body, motion, positions, velocities);
+}
+
+void kickAndProjectBodiesVelocities(const BodyView* bodies, int count, const Kick& kick, const double* positions,
+                                    double* velocities) {
+    const KickedVelocity velocity(kick, velocities);
+    MotionSums sums[4];
+    double j[24], L[12], omega[12];
+    for (int first = 0; first < count; first += 4) {
+        const int n = std::min(4, count - first);
+        int general[4], numGeneral = 0;
+        for (int i = 0; i < n; i++) {
+            rigidMotionSums(bodies[first + i], positions, velocity, sums[i]);
+            if (!bodies[first + i].linear) {
+                std::copy(sums[i].j, sums[i].j + 6, j + 6 * numGeneral);
+                std::copy(sums[i].L, sums[i].L + 3, L + 3 * numGeneral);
+                general[numGeneral++] = i;
+            }
+        }
+        TorqueCondition::solveInertiaUpToFour(j, L, omega, numGeneral);
+        for (int g = 0; g < numGeneral; g++)
+            sums[general[g]].motion.omega = Vector3d(omega[3 * g], omega[3 * g + 1], omega[3 * g + 2]);
+        for (int i = 0; i < n; i++)
+            setRigidVelocities(bodies[first + i], sums[i].motion, positions, velocities);
+    }
 }
 
 double nonRigidVelocityFraction(const BodyView& body, const double* positions, const double* velocities) {

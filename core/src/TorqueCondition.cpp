@@ -153,6 +153,21 @@ MRATTLE_INLINE void solveLanes(const typename L::Real* j, const typename L::Real
 }
 
 #ifdef MRATTLE_HAVE_AVX2_LANES
+__attribute__((target("avx2"))) void solveInertiaFourLanes(const double* j, const double* b, double* x, int count) {
+    Double4 jLanes[6], bLanes[3], xLanes[3];
+    for (int lane = 0; lane < 4; lane++) {
+        const int from = lane < count ? lane : 0;   // spare lanes repeat the first
+        for (int k = 0; k < 6; k++)
+            jLanes[k][lane] = j[6 * from + k];
+        for (int k = 0; k < 3; k++)
+            bLanes[k][lane] = b[3 * from + k];
+    }
+    inertiaSolve(jLanes, bLanes[0], bLanes[1], bLanes[2], xLanes[0], xLanes[1], xLanes[2]);
+    for (int lane = 0; lane < count; lane++)
+        for (int k = 0; k < 3; k++)
+            x[3 * lane + k] = xLanes[k][lane];
+}
+
 __attribute__((target("avx2"))) void solveFourLanes(const Condition* conditions, int count, Solution* solutions,
                                                      int maxIterations) {
     Double4 j[6], target[3], w[3], iterations;
@@ -201,6 +216,17 @@ bool usesSimdLanes() {
 #else
     return false;
 #endif
+}
+
+void solveInertiaUpToFour(const double* j, const double* b, double* x, int count) {
+#ifdef MRATTLE_HAVE_AVX2_LANES
+    if (count > 1 && usesSimdLanes()) {
+        solveInertiaFourLanes(j, b, x, count);
+        return;
+    }
+#endif
+    for (int i = 0; i < count; i++)
+        solveInertia(j + 6 * i, b + 3 * i, x + 3 * i);
 }
 
 void solveUpToFour(const Condition* conditions, int count, Solution* solutions, int maxIterations) {

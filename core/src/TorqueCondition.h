@@ -31,6 +31,9 @@ struct Solution {
  */
 void solveInertia(const double* j, const double* b, double* x);
 
+/** solveInertia for count (at most 4) bodies, j, b and x consecutive; in AVX2 lanes as solveUpToFour. */
+void solveInertiaUpToFour(const double* j, const double* b, double* x, int count);
+
 /** Solve one condition in at most maxIterations iterations. */
 Solution solve(const Condition& condition, int maxIterations);
 

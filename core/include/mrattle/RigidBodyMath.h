@@ -142,6 +142,13 @@ void projectBodyVelocities(const BodyView& body, const double* positions, double
 void kickAndProjectBodyVelocities(const BodyView& body, const Kick& kick, const double* positions, double* velocities);
 
 /**
+ * kickAndProjectBodyVelocities for count bodies, four at a time: their inertia solves share
+ * AVX2 lanes where the CPU has them; each body's result is bit for bit the one-body function's.
+ */
+void kickAndProjectBodiesVelocities(const BodyView* bodies, int count, const Kick& kick, const double* positions,
+                                    double* velocities);
+
+/**
  * How far a body's velocities are from rigid-body motion: the largest distance of an atom's
  * velocity from the projection's, over the largest velocity of the projection (0 for
  * rigid motion, infinite for velocities with no rigid part at all).

@@ -145,6 +145,13 @@ private:
     bool andersen = false;
     int numThreads = 1;
     std::unique_ptr<OpenMM::ThreadPool> helpers;   // numThreads - 1 workers; the caller is the last
+    /**
+     * Call work(views, count) on the bodies begin .. end - 1, four (or the rest) at a time;
+     * work returns the index in views of the first that failed, or count. Returns the first
+     * failed body, or INT_MAX.
+     */
+    int inBlocksOfFour(int begin, int end,
+                       const std::function<int(const RigidBodyMath::BodyView*, int)>& work) const;
     /** Call work(t) for t = 0 .. numThreads - 1, t = numThreads - 1 on the calling thread. */
     void forEachThread(const std::function<void(int)>& work);
     std::mt19937_64 collisionRandom;

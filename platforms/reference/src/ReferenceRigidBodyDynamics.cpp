@@ -96,6 +96,21 @@ RigidBodyMath::Kick ReferenceRigidBodyDynamics::kickOf(const vector<Vec3>* force
     return kick;
 }
 
+int ReferenceRigidBodyDynamics::inBlocksOfFour(int begin, int end,
+                                               const std::function<int(const RigidBodyMath::BodyView*, int)>& work) const {
+    // The core treats four bodies at a time (their solves share SIMD lanes).
+    for (int first = begin; first < end; first += 4) {
+        RigidBodyMath::BodyView views[4];
+        const int count = std::min(4, end - first);
+        for (int i = 0; i < count; i++)
+            views[i] = view(first + i);
+        const int failure = work(views, count);
+        if (failure < count)
+            return first + failure;
+    }
+    return INT_MAX;
+}
+
 void ReferenceRigidBodyDynamics::setThreads(int count) {
     numThreads = std::max(count, 1);
     if (numThreads > 1)
@@ -212,18 +227,10 @@ void ReferenceRigidBodyDynamics::driftAndReset(vector<Vec3>& x, const vector<Vec
     const RigidBodyMath::Kick kick = kickOf(forces, kickTime);
     const int failed = forEachBodyRangeAndFreeParticle(
         [&](int begin, int end) {
-            // Four bodies at a time: the core solves their rotations together.
-            for (int first = begin; first < end; first += 4) {
-                RigidBodyMath::BodyView views[4];
-                const int count = std::min(4, end - first);
-                for (int i = 0; i < count; i++)
-                    views[i] = view(first + i);
-                const int failure = RigidBodyMath::kickDriftAndResetBodies(views, count, kick, h, oldPositions,
-                                                                           oldVelocities, positionsOut, velocitiesOut);
-                if (failure < count)
-                    return first + failure;
-            }
-            return INT_MAX;
+            return inBlocksOfFour(begin, end, [&](const RigidBodyMath::BodyView* views, int count) {
+                return RigidBodyMath::kickDriftAndResetBodies(views, count, kick, h, oldPositions, oldVelocities,
+                                                              positionsOut, velocitiesOut);
+            });
         },
         [&](int begin, int end) {
             for (int k = begin; k < end; k++) {
@@ -258,10 +265,15 @@ void ReferenceRigidBodyDynamics::projectVelocities(vector<Vec3>& positions, vect
         freeConstraints->applyToVelocities(positions, velocities, inverseMass, tolerance);
     const double* x = coordinates(positions);
     double* v = coordinates(velocities);
-    forEachBody([&](int b) {
-        RigidBodyMath::projectBodyVelocities(view(b), x, v);
-        return true;
-    });
+    const RigidBodyMath::Kick noKick;
+    forEachBodyRangeAndFreeParticle(
+        [&](int begin, int end) {
+            return inBlocksOfFour(begin, end, [&](const RigidBodyMath::BodyView* views, int count) {
+                RigidBodyMath::kickAndProjectBodiesVelocities(views, count, noKick, x, v);
+                return count;
+            });
+        },
+        nullptr);
 }
 
 void ReferenceRigidBodyDynamics::projectNonRigidVelocities(vector<Vec3>& positions, vector<Vec3>& velocities,
@@ -293,10 +305,12 @@ void ReferenceRigidBodyDynamics::kickAndProject(ContextImpl& context, double ste
     const double* xs = coordinates(x);
     double* vs = coordinates(v);
     const RigidBodyMath::Kick bodyKick = kickOf(&f, halfStep);
-    forEachBodyAndFreeParticle(
-        [&](int b) {
-            RigidBodyMath::kickAndProjectBodyVelocities(view(b), bodyKick, xs, vs);
-            return true;
+    forEachBodyRangeAndFreeParticle(
+        [&](int begin, int end) {
+            return inBlocksOfFour(begin, end, [&](const RigidBodyMath::BodyView* views, int count) {
+                RigidBodyMath::kickAndProjectBodiesVelocities(views, count, bodyKick, xs, vs);
+                return count;
+            });
         },
         [&](int begin, int end) {
             for (int k = begin; k < end; k++)
