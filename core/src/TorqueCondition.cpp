@@ -28,7 +28,8 @@ struct ScalarLanes {
     static MRATTLE_INLINE Mask negate(Mask a) { return !a; }
 };
 
-#if defined(__GNUC__) && (defined(__x86_64__) || defined(__i386__))
+// GCC on x86-64 (its vector extensions, including ?: on vectors, and __builtin_cpu_supports).
+#if defined(__GNUC__) && !defined(__clang__) && defined(__x86_64__)
 #define MRATTLE_HAVE_AVX2_LANES 1
 typedef double Double4 __attribute__((vector_size(32)));
 typedef long long Mask4 __attribute__((vector_size(32)));
