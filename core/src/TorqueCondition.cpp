@@ -13,8 +13,6 @@ namespace {
  * the width or on its neighbours. Per-lane decisions (a new Jacobian, convergence) are
  * masks; a lane that has converged or failed is frozen while the others go on.
  */
-#define MRATTLE_INLINE inline __attribute__((always_inline))
-
 struct ScalarLanes {
     typedef double Real;
     typedef bool Mask;
@@ -49,24 +47,6 @@ struct Avx2Lanes {
     static MRATTLE_INLINE Mask negate(Mask a) { return ~a; }
 };
 #endif
-
-/**
- * x = I^-1 b for the inertia I = tr(J) - J of the second moment j (six entries), by I's
- * cofactors (I and its adjugate are symmetric). No pivoting: an inertia tensor needs none;
- * the result is not finite if I is singular.
- */
-template <class Real>
-MRATTLE_INLINE void inertiaSolve(const Real* j, Real b0, Real b1, Real b2, Real& x0, Real& x1, Real& x2) {
-    const Real j00 = j[0], j01 = j[1], j02 = j[2], j11 = j[3], j12 = j[4], j22 = j[5];
-    const Real traceJ = j00 + j11 + j22;
-    const Real i00 = traceJ - j00, i11 = traceJ - j11, i22 = traceJ - j22;
-    const Real c00 = i11 * i22 - j12 * j12, c01 = j01 * i22 + j12 * j02, c02 = j01 * j12 + i11 * j02;
-    const Real c11 = i00 * i22 - j02 * j02, c12 = i00 * j12 + j01 * j02, c22 = i00 * i11 - j01 * j01;
-    const Real inverseDet = 1.0 / (i00 * c00 - j01 * c01 - j02 * c02);
-    x0 = (c00 * b0 + c01 * b1 + c02 * b2) * inverseDet;
-    x1 = (c01 * b0 + c11 * b1 + c12 * b2) * inverseDet;
-    x2 = (c02 * b0 + c12 * b1 + c22 * b2) * inverseDet;
-}
 
 /**
  * P is parametrised by its half Gibbs vector w (tan of half the angle along the axis):
@@ -191,10 +171,6 @@ __attribute__((target("avx2"))) void solveFourLanes(const Condition* conditions,
 #endif
 
 } // namespace
-
-void solveInertia(const double* j, const double* b, double* x) {
-    inertiaSolve(j, b[0], b[1], b[2], x[0], x[1], x[2]);
-}
 
 Solution solve(const Condition& c, int maxIterations) {
     const double j[6] = {c.j00, c.j01, c.j02, c.j11, c.j12, c.j22}, target[3] = {c.t0, c.t1, c.t2};
