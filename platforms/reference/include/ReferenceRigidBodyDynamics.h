@@ -40,8 +40,13 @@ public:
     const std::vector<double>& inverseMasses() const {
         return inverseMass;
     }
-    /** The numerical core's view of one body. */
-    RigidBodyMath::BodyView view(int body) const;
+    /** The numerical core's view of one body (inline: the step takes one per body, twice). */
+    RigidBodyMath::BodyView view(int body) const {
+        const std::vector<int>& atoms = bodies.getBodyParticles(body);
+        // A point rotates no more than a line does: both take the linear body's arithmetic.
+        return RigidBodyMath::BodyView{atoms.data(), (int) atoms.size(), bodies.getMasses().data(),
+                                       bodies.getBodyMass(body), shapes[body] != RigidBodyMath::Shape::General};
+    }
     /** The core's kick by these forces (none if null) over this time. */
     RigidBodyMath::Kick kickOf(const std::vector<OpenMM::Vec3>* forces, double time) const;
     /**

@@ -79,13 +79,6 @@ void ReferenceRigidBodyDynamics::advanceClock(ContextImpl& context, double stepS
     data.stepCount++;
 }
 
-RigidBodyMath::BodyView ReferenceRigidBodyDynamics::view(int body) const {
-    const vector<int>& atoms = bodies.getBodyParticles(body);
-    // A point rotates no more than a line does: both take the linear body's arithmetic.
-    return RigidBodyMath::BodyView{atoms.data(), (int) atoms.size(), bodies.getMasses().data(), bodies.getBodyMass(body),
-                                   shapes[body] != RigidBodyMath::Shape::General};
-}
-
 RigidBodyMath::Kick ReferenceRigidBodyDynamics::kickOf(const vector<Vec3>* forces, double time) const {
     RigidBodyMath::Kick kick;
     if (forces != nullptr) {
