@@ -61,14 +61,10 @@ public:
      */
     int forEachBody(const std::function<bool(int)>& work);
     /**
-     * The same, with freeWork(begin, end) on ranges of the free-particle list in the same
-     * parallel region: one region per phase of a step instead of one per loop.
-     */
-    int forEachBodyAndFreeParticle(const std::function<bool(int)>& work,
-                                   const std::function<void(int, int)>& freeWork);
-    /**
      * The same with work(begin, end) on contiguous ranges of bodies, one per thread, which
-     * returns the first failed body of its range (INT_MAX if none).
+     * returns the first failed body of its range (INT_MAX if none), and freeWork(begin, end)
+     * (if given) on ranges of the free-particle list in the same parallel region: one region
+     * per phase of a step instead of one per loop.
      */
     int forEachBodyRangeAndFreeParticle(const std::function<int(int, int)>& work,
                                         const std::function<void(int, int)>& freeWork);

@@ -128,11 +128,6 @@ void ReferenceRigidBodyDynamics::forEachThread(const std::function<void(int)>& w
 }
 
 int ReferenceRigidBodyDynamics::forEachBody(const std::function<bool(int)>& work) {
-    return forEachBodyAndFreeParticle(work, nullptr);
-}
-
-int ReferenceRigidBodyDynamics::forEachBodyAndFreeParticle(const std::function<bool(int)>& work,
-                                                           const std::function<void(int, int)>& freeWork) {
     return forEachBodyRangeAndFreeParticle(
         [&](int begin, int end) {
             for (int b = begin; b < end; b++)
@@ -140,7 +135,7 @@ int ReferenceRigidBodyDynamics::forEachBodyAndFreeParticle(const std::function<b
                     return b;
             return INT_MAX;
         },
-        freeWork);
+        nullptr);
 }
 
 int ReferenceRigidBodyDynamics::forEachBodyRangeAndFreeParticle(const std::function<int(int, int)>& work,
