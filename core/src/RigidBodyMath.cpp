@@ -180,8 +180,8 @@ RotationSolve solveResetRotationForTorque(const Matrix3d& J, const Vector3d& tar
 namespace {
 
 /**
- * The rotation of one body's reset, given each atom's displacement y_i - a_i relative to
- * the centres (small: formed without the absolute positions, so no digits are lost).
+ * One body's torque condition: J about the old centre and the target sum m a x (y - a),
+ * from each atom's displacement y_i - a_i relative to the centres.
  */
 template <class Displacement>
 TorqueCondition::Condition torqueConditionOf(const BodyView& body, const double* oldPositions,

@@ -170,6 +170,16 @@ __attribute__((target("avx2"))) void solveFourLanes(const Condition* conditions,
 }
 #endif
 
+/** Whether the four-lane functions run (AVX2 on this CPU), checked once. */
+bool usesSimdLanes() {
+#ifdef MRATTLE_HAVE_AVX2_LANES
+    static const bool avx2 = __builtin_cpu_supports("avx2");
+    return avx2;
+#else
+    return false;
+#endif
+}
+
 } // namespace
 
 Solution solve(const Condition& c, int maxIterations) {
@@ -184,15 +194,6 @@ Solution solve(const Condition& c, int maxIterations) {
     solution.iterations = (int) iterations;
     solution.converged = converged;
     return solution;
-}
-
-bool usesSimdLanes() {
-#ifdef MRATTLE_HAVE_AVX2_LANES
-    static const bool avx2 = __builtin_cpu_supports("avx2");
-    return avx2;
-#else
-    return false;
-#endif
 }
 
 void solveInertiaUpToFour(const double* j, const double* b, double* x, int count) {

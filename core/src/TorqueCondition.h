@@ -72,8 +72,6 @@ Solution solve(const Condition& condition, int maxIterations);
  */
 void solveUpToFour(const Condition* conditions, int count, Solution* solutions, int maxIterations);
 
-/** Whether solveUpToFour uses AVX2 lanes on this CPU. */
-bool usesSimdLanes();
 
 } // namespace TorqueCondition
 } // namespace MRattlePlugin

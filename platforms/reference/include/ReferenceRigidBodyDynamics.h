@@ -40,15 +40,12 @@ public:
     const std::vector<double>& inverseMasses() const {
         return inverseMass;
     }
-    /** The numerical core's view of one body (inline: the step takes one per body, twice). */
-    RigidBodyMath::BodyView view(int body) const {
-        const std::vector<int>& atoms = bodies.getBodyParticles(body);
-        // A point rotates no more than a line does: both take the linear body's arithmetic.
-        return RigidBodyMath::BodyView{atoms.data(), (int) atoms.size(), bodies.getMasses().data(),
-                                       bodies.getBodyMass(body), shapes[body] != RigidBodyMath::Shape::General};
+    ReferenceRigidBodyDynamics(const ReferenceRigidBodyDynamics&) = delete;  // views point into bodies
+    ReferenceRigidBodyDynamics& operator=(const ReferenceRigidBodyDynamics&) = delete;
+    /** The numerical core's view of one body. */
+    const RigidBodyMath::BodyView& view(int body) const {
+        return views[body];
     }
-    /** The core's kick by these forces (none if null) over this time. */
-    RigidBodyMath::Kick kickOf(const std::vector<OpenMM::Vec3>* forces, double time) const;
     /**
      * Use this many threads for the per-body work (the CPU platform's Threads). Each body is
      * computed the same way whichever thread takes it, so results do not depend on it.
@@ -60,14 +57,6 @@ public:
      * (INT_MAX if none), so which body is reported does not depend on the threads either.
      */
     int forEachBody(const std::function<bool(int)>& work);
-    /**
-     * The same with work(begin, end) on contiguous ranges of bodies, one per thread, which
-     * returns the first failed body of its range (INT_MAX if none), and freeWork(begin, end)
-     * (if given) on ranges of the free-particle list in the same parallel region: one region
-     * per phase of a step instead of one per loop.
-     */
-    int forEachBodyRangeAndFreeParticle(const std::function<int(int, int)>& work,
-                                        const std::function<void(int, int)>& freeWork);
     /**
      * Call work(begin, end) on contiguous ranges covering every particle, one per thread
      * when there are enough particles to pay for them: for per-atom loops (kicks, drifts)
@@ -141,18 +130,28 @@ private:
     RigidBodyTopology bodies;
     std::vector<double> inverseMass;
     std::vector<RigidBodyMath::Shape> shapes;
-    std::vector<int> otherParticles;   // neither body members nor free: massless, virtual sites
+    std::vector<int> otherParticles;   // neither body members nor free: massless (virtual sites too)
     std::unique_ptr<OpenMM::ReferenceConstraints> freeConstraints;
     bool andersen = false;
     int numThreads = 1;
     std::unique_ptr<OpenMM::ThreadPool> helpers;   // numThreads - 1 workers; the caller is the last
+    std::vector<RigidBodyMath::BodyView> views;   // one per body, its linear flag from shapes
+    /** The core's kick by these forces (none if null) over this time. */
+    RigidBodyMath::Kick kickOf(const std::vector<OpenMM::Vec3>* forces, double time) const;
     /**
-     * Call work(views, count) on the bodies begin .. end - 1, four (or the rest) at a time;
-     * work returns the index in views of the first that failed, or count. Returns the first
-     * failed body, or INT_MAX.
+     * forEachBody with work(begin, end) on contiguous ranges of bodies, one per thread, which
+     * returns the first failed body of its range (INT_MAX if none), and freeWork(begin, end)
+     * (if given) on ranges of the free-particle list in the same parallel region: one region
+     * per phase of a step instead of one per loop.
      */
-    int inBlocksOfFour(int begin, int end,
-                       const std::function<int(const RigidBodyMath::BodyView*, int)>& work) const;
+    int forEachBodyRangeAndFreeParticle(const std::function<int(int, int)>& work,
+                                        const std::function<void(int, int)>& freeWork);
+    /**
+     * The kick (if any) and RATTLE's velocity step of every body, the core taking them four at
+     * a time, with freeWork on the free particles in the same parallel region.
+     */
+    void kickAndProjectBodies(const double* positions, double* velocities, const RigidBodyMath::Kick& kick,
+                              const std::function<void(int, int)>& freeWork);
     /** Call work(t) for t = 0 .. numThreads - 1, t = numThreads - 1 on the calling thread. */
     void forEachThread(const std::function<void(int)>& work);
     std::mt19937_64 collisionRandom;

@@ -33,6 +33,11 @@ ReferenceRigidBodyDynamics::ReferenceRigidBodyDynamics(const System& system, con
         inverseMass[i] = (mass == 0.0 ? 0.0 : 1.0 / mass);
     }
     shapes.assign(bodies.getNumBodies(), RigidBodyMath::Shape::General);
+    for (int b = 0; b < bodies.getNumBodies(); b++) {
+        const vector<int>& atoms = bodies.getBodyParticles(b);
+        views.push_back(RigidBodyMath::BodyView{atoms.data(), (int) atoms.size(), bodies.getMasses().data(),
+                                                bodies.getBodyMass(b), false});
+    }
     vector<bool> free(n, false);
     for (int i : bodies.getFreeParticles())
         free[i] = true;
@@ -87,21 +92,6 @@ RigidBodyMath::Kick ReferenceRigidBodyDynamics::kickOf(const vector<Vec3>* force
         kick.time = time;
     }
     return kick;
-}
-
-int ReferenceRigidBodyDynamics::inBlocksOfFour(int begin, int end,
-                                               const std::function<int(const RigidBodyMath::BodyView*, int)>& work) const {
-    // The core treats four bodies at a time (their solves share SIMD lanes).
-    for (int first = begin; first < end; first += 4) {
-        RigidBodyMath::BodyView views[4];
-        const int count = std::min(4, end - first);
-        for (int i = 0; i < count; i++)
-            views[i] = view(first + i);
-        const int failure = work(views, count);
-        if (failure < count)
-            return first + failure;
-    }
-    return INT_MAX;
 }
 
 void ReferenceRigidBodyDynamics::setThreads(int count) {
@@ -173,9 +163,11 @@ void ReferenceRigidBodyDynamics::forEachParticleRange(const std::function<void(i
 void ReferenceRigidBodyDynamics::updateShapes(const vector<Vec3>& positions) {
     const double* data = reinterpret_cast<const double*>(positions.data());
     for (int b = 0; b < bodies.getNumBodies(); b++) {
-        RigidBodyMath::BodyView body = view(b);
+        const RigidBodyMath::BodyView& body = view(b);
         Eigen::Vector3d center = RigidBodyMath::centerOfMass(body, data);
         shapes[b] = RigidBodyMath::classifyShape(RigidBodyMath::secondMoment(body, data, center), body.totalMass);
+        // A point rotates no more than a line does: both take the linear body's arithmetic.
+        views[b].linear = (shapes[b] != RigidBodyMath::Shape::General);
     }
 }
 
@@ -196,13 +188,11 @@ void ReferenceRigidBodyDynamics::seedRandom(int seed) {
 void ReferenceRigidBodyDynamics::driftAndReset(vector<Vec3>& x, const vector<Vec3>& v, double h, double tolerance,
                                                vector<Vec3>& newPositions, vector<Vec3>& newVelocities,
                                                const vector<Vec3>* forces, double kickTime) {
-    // One particle's velocity after the kick (if forces are given).
-    auto kicked = [&](int i) {
-        return (forces != nullptr && inverseMass[i] != 0) ? v[i] + (*forces)[i] * (kickTime * inverseMass[i]) : v[i];
-    };
-    for (int i : otherParticles) {
-        newVelocities[i] = kicked(i);
-        newPositions[i] = (inverseMass[i] != 0 ? x[i] + newVelocities[i] * h : x[i]);
+    // A free particle's velocity after the kick (if forces are given; free particles are massive).
+    auto kicked = [&](int i) { return forces != nullptr ? v[i] + (*forces)[i] * (kickTime * inverseMass[i]) : v[i]; };
+    for (int i : otherParticles) {   // massless: they do not move by themselves
+        newVelocities[i] = v[i];
+        newPositions[i] = x[i];
     }
     // One parallel region: free particles' drifts (their velocities come from the constrained
     // displacement below), and each body's kick, drift and reset in the same passes over its
@@ -215,14 +205,14 @@ void ReferenceRigidBodyDynamics::driftAndReset(vector<Vec3>& x, const vector<Vec
     const RigidBodyMath::Kick kick = kickOf(forces, kickTime);
     const int failed = forEachBodyRangeAndFreeParticle(
         [&](int begin, int end) {
-            return inBlocksOfFour(begin, end, [&](const RigidBodyMath::BodyView* views, int count) {
-                return RigidBodyMath::kickDriftAndResetBodies(views, count, kick, h, oldPositions, oldVelocities,
-                                                              positionsOut, velocitiesOut);
-            });
+            const int failed = RigidBodyMath::kickDriftAndResetBodies(views.data() + begin, end - begin, kick, h,
+                                                                      oldPositions, oldVelocities, positionsOut,
+                                                                      velocitiesOut);
+            return failed < end - begin ? begin + failed : INT_MAX;
         },
         [&](int begin, int end) {
             for (int k = begin; k < end; k++) {
-                const int i = freeParticles[k];   // free particles are massive
+                const int i = freeParticles[k];
                 newPositions[i] = x[i] + kicked(i) * h;
             }
         });
@@ -251,17 +241,19 @@ void ReferenceRigidBodyDynamics::constrainFreePositions(vector<Vec3>& oldPositio
 void ReferenceRigidBodyDynamics::projectVelocities(vector<Vec3>& positions, vector<Vec3>& velocities, double tolerance) {
     if (freeConstraints)
         freeConstraints->applyToVelocities(positions, velocities, inverseMass, tolerance);
-    const double* x = coordinates(positions);
-    double* v = coordinates(velocities);
-    const RigidBodyMath::Kick noKick;
+    kickAndProjectBodies(coordinates(positions), coordinates(velocities), RigidBodyMath::Kick(), nullptr);
+}
+
+void ReferenceRigidBodyDynamics::kickAndProjectBodies(const double* positions, double* velocities,
+                                                      const RigidBodyMath::Kick& kick,
+                                                      const std::function<void(int, int)>& freeWork) {
     forEachBodyRangeAndFreeParticle(
         [&](int begin, int end) {
-            return inBlocksOfFour(begin, end, [&](const RigidBodyMath::BodyView* views, int count) {
-                RigidBodyMath::kickAndProjectBodiesVelocities(views, count, noKick, x, v);
-                return count;
-            });
+            RigidBodyMath::kickAndProjectBodiesVelocities(views.data() + begin, end - begin, kick, positions,
+                                                          velocities);
+            return INT_MAX;
         },
-        nullptr);
+        freeWork);
 }
 
 void ReferenceRigidBodyDynamics::projectNonRigidVelocities(vector<Vec3>& positions, vector<Vec3>& velocities,
@@ -281,29 +273,15 @@ void ReferenceRigidBodyDynamics::kickAndProject(ContextImpl& context, double ste
     vector<Vec3>& v = velocities(context);
     const vector<Vec3>& f = forces(context);
     const double halfStep = 0.5 * stepSize;
-    auto kick = [&](int i) {
-        if (inverseMass[i] != 0)
-            v[i] += f[i] * (halfStep * inverseMass[i]);
-    };
-    for (int i : otherParticles)
-        kick(i);
-    // One parallel region: free particles' kicks, and each body's kick and projection in the
-    // same passes over its atoms.
+    // One parallel region: free particles' kicks (they are massive), and each body's kick and
+    // projection in the same passes over its atoms. Massless particles take no kick.
     const vector<int>& freeParticles = bodies.getFreeParticles();
-    const double* xs = coordinates(x);
-    double* vs = coordinates(v);
-    const RigidBodyMath::Kick bodyKick = kickOf(&f, halfStep);
-    forEachBodyRangeAndFreeParticle(
-        [&](int begin, int end) {
-            return inBlocksOfFour(begin, end, [&](const RigidBodyMath::BodyView* views, int count) {
-                RigidBodyMath::kickAndProjectBodiesVelocities(views, count, bodyKick, xs, vs);
-                return count;
-            });
-        },
-        [&](int begin, int end) {
-            for (int k = begin; k < end; k++)
-                kick(freeParticles[k]);
-        });
+    kickAndProjectBodies(coordinates(x), coordinates(v), kickOf(&f, halfStep), [&](int begin, int end) {
+        for (int k = begin; k < end; k++) {
+            const int i = freeParticles[k];
+            v[i] += f[i] * (halfStep * inverseMass[i]);
+        }
+    });
     // RATTLE's velocity step for the free constraints (it touches free particles only).
     if (freeConstraints)
         freeConstraints->applyToVelocities(x, v, inverseMass, tolerance);

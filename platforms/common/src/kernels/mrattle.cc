@@ -93,6 +93,15 @@ DEVICE bool solve3(Matrix3 A, mixed3 b, mixed3* x) {
     return true;
 }
 
+/** The inertia I = tr(J) - J of a second moment J whose trace is given. */
+DEVICE Matrix3 inertiaOf(Matrix3 J, mixed traceJ) {
+    Matrix3 I;
+    I.m00 = traceJ - J.m00; I.m01 = -J.m01; I.m02 = -J.m02;
+    I.m10 = -J.m10; I.m11 = traceJ - J.m11; I.m12 = -J.m12;
+    I.m20 = -J.m20; I.m21 = -J.m21; I.m22 = traceJ - J.m22;
+    return I;
+}
+
 /**
  * The reset rotation, as the core solves it (RigidBodyMath::solveResetRotationForTorque):
  * P is the Cayley rotation of w, P - 1 = c ([w]x + [w]x^2) with c = 2 / (1 + |w|^2), and the
@@ -103,10 +112,7 @@ DEVICE bool solve3(Matrix3 A, mixed3 b, mixed3* x) {
  */
 DEVICE bool solveRotation(Matrix3 J, mixed3 target, Matrix3* delta) {
     const mixed traceJ = J.m00 + J.m11 + J.m22;
-    Matrix3 I;
-    I.m00 = traceJ - J.m00; I.m01 = -J.m01; I.m02 = -J.m02;
-    I.m10 = -J.m10; I.m11 = traceJ - J.m11; I.m12 = -J.m12;
-    I.m20 = -J.m20; I.m21 = -J.m21; I.m22 = traceJ - J.m22;
+    const Matrix3 I = inertiaOf(J, traceJ);
     const mixed3 t = make_mixed3(0.5f*target.x, 0.5f*target.y, 0.5f*target.z);
     mixed3 w;
     if (!solve3(I, t, &w))
@@ -463,13 +469,8 @@ KERNEL void projectBodies(int numBodies, GLOBAL const int* RESTRICT bodyStart, G
                     omega = (L - dot(L, u)*u)*(1/j);
                 }
             }
-            else {
-                Matrix3 I;
-                I.m00 = j - J.m00; I.m01 = -J.m01; I.m02 = -J.m02;
-                I.m10 = -J.m10; I.m11 = j - J.m11; I.m12 = -J.m12;
-                I.m20 = -J.m20; I.m21 = -J.m21; I.m22 = j - J.m22;
-                solve3(I, L, &omega);
-            }
+            else
+                solve3(inertiaOf(J, j), L, &omega);
             mixed scale = 0, residual = 0;
             for (int k = start; k < end; k++) {
                 const int atom = bodyAtoms[k];
