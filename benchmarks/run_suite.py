@@ -145,7 +145,7 @@ def main():
         write_csv(os.path.join(results_dir, "long_drift.csv"),
                   [{k: v for k, v in r.items() if not k.startswith("series_")} for r in drows])
         long_drift.plot(drows, os.path.join(results_dir, "long_drift.png"))
-        md += long_drift_section(drows, long_drift.summary(drows), dtemp, deq, dsample, dradius)
+        md += long_drift_section(drows, dtemp, deq, dsample, dradius)
 
     if "gains" in parts:
         log("gains: liquid benzene with PME")
@@ -528,8 +528,9 @@ def sampling_verdict(rows, runs_per_method):
                 runs_per_method, runs_per_method, len(lines), 100 * (1 - 0.9545 ** len(lines))) + "".join(lines)]
 
 
-def long_drift_section(rows, summary, temperature, equilibrate_ps, sample_ps, radius):
+def long_drift_section(rows, temperature, equilibrate_ps, sample_ps, radius):
     """Long NVE runs from equilibrated starts: drift with standard error per run, and what they show."""
+    from suite import long_drift
     md = ["\n## Long-run energy drift\n"]
     lengths = ", ".join("%g ps at %g fs" % (length, step) for step, length in sorted(
         {(r["step_fs"], round(r["length_ps"], 1)) for r in rows}, reverse=True))
@@ -558,7 +559,7 @@ def long_drift_section(rows, summary, temperature, equilibrate_ps, sample_ps, ra
                      "rigidity (nm)": "%.1e", "wall (s)": "%.0f"}))
     md.append("![E(t) - E(0)](results/long_drift.png)\n")
     lines = []
-    for s in summary:
+    for s in long_drift.summary(rows):
         spread = (", spread (standard deviation) over runs %.4f" % s["spread"]) if math.isfinite(s["spread"]) else ""
         lines.append("- %g fs, %s: %d run%s, mean drift %+.4f kJ/mol/ns%s; %d of %d consistent with zero within 2 SE; "
                      "largest |drift| + 2 SE %.4f kJ/mol/ns.\n" % (
@@ -572,24 +573,25 @@ def long_drift_section(rows, summary, temperature, equilibrate_ps, sample_ps, ra
 
 def long_drift_reading(rows, claim=0.03):
     """What the long runs show and cannot show, worded from their numbers."""
+    from suite import long_drift
     md = []
     finite = [r for r in rows if math.isfinite(r["drift_per_ns"]) and math.isfinite(r["drift_error_per_ns"])]
     if not finite:
         return ["No run gave a drift fit.\n"]
     def name(r):
         return "%s %g fs seed %d" % (r["method"], r["step_fs"], r["seed"])
-    zero = [r for r in finite if abs(r["drift_per_ns"]) <= 2 * r["drift_error_per_ns"]]
+    zero = [r for r in finite if long_drift.within_se(r["drift_per_ns"], r["drift_error_per_ns"])]
     beyond = [r for r in finite if r not in zero]
     text = "\n%d of %d runs have a drift consistent with zero within 2 standard errors" % (len(zero), len(finite))
     if beyond:
-        def chance(r):  # two-sided normal tail at this run's z, and for at least one of all runs
+        def chance(r):  # at least one of all runs beyond this run's z (two-sided normal tails)
             p = math.erfc(abs(r["drift_per_ns"]) / r["drift_error_per_ns"] / math.sqrt(2))
-            return p, 1 - (1 - p) ** len(finite)
+            return 1 - (1 - p) ** len(finite)
         text += "; %s. " % "; ".join(
             "%s is %.1f SE from zero, with %d molecule%s departed (were every drift zero and the standard errors "
             "right, at least one of %d runs would land that far from zero with probability %.2g%%)" % (
                 name(r), abs(r["drift_per_ns"]) / r["drift_error_per_ns"], r["departed"],
-                "" if r["departed"] == 1 else "s", len(finite), 100 * chance(r)[1]) for r in beyond)
+                "" if r["departed"] == 1 else "s", len(finite), 100 * chance(r)) for r in beyond)
     else:
         text += ". "
     bounds = {name(r): abs(r["drift_per_ns"]) + 2 * r["drift_error_per_ns"] for r in finite}

@@ -60,12 +60,12 @@ def isolated_benzene(steps_fs, total_ps, log):
     total_ps = max(1, round(total_ps / 0.032)) * 0.032
     ref = common.nve_run(system, x0, v0, "M-RATTLE", reference_step, total_ps, total_ps, "Reference", bodies)
     ref_positions = ref["context"].getState(getPositions=True).getPositions(asNumpy=True).value_in_unit(unit.nanometer)
+    L0 = _angular_momentum(_initial_state(system, x0, v0), system)
     rows = []
     for method in ("M-RATTLE", "splitting"):
         for h in steps_fs:
             run = common.nve_run(system, x0, v0, method, h * common.FS, total_ps, 0.032, "Reference", bodies)
             state = run["context"].getState(getPositions=True, getVelocities=True)
-            L0 = _angular_momentum(_initial_state(system, x0, v0), system)
             L = _angular_momentum(state, system)
             e = run["total"]
             rows.append({

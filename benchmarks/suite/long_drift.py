@@ -90,11 +90,16 @@ def run_one(system, positions, velocities, bodies, method, step_fs, total_ps, sa
     }
 
 
+def within_se(drift, error, sigmas=2.0):
+    """Whether a drift is within `sigmas` standard errors of zero."""
+    return abs(drift) <= sigmas * error
+
+
 def verdict(drift, error, sigmas=2.0):
     """Whether a drift differs from zero by more than `sigmas` standard errors, in words."""
     if not (np.isfinite(drift) and np.isfinite(error)):
         return "no fit"
-    if abs(drift) <= sigmas * error:
+    if within_se(drift, error, sigmas):
         return "consistent with zero within %g SE" % sigmas
     return "nonzero (%s, beyond %g SE)" % ("gain" if drift > 0 else "loss", sigmas)
 
@@ -139,7 +144,7 @@ def summary(rows):
             out.append({"step_fs": step_fs, "method": method, "runs": len(runs), "mean_drift": float(d.mean()),
                         "spread": float(d.std(ddof=1)) if len(d) > 1 else float("nan"),
                         "bound": float(np.max(np.abs(d) + 2 * se)),
-                        "zero_within_2se": int(sum(abs(a) <= 2 * b for a, b in zip(d, se)))})
+                        "zero_within_2se": int(sum(within_se(a, b) for a, b in zip(d, se)))})
     return out
 
 

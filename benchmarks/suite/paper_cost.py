@@ -10,16 +10,22 @@ import mrattle
 from . import common
 
 
-def _context(model, method, platform_name):
-    """(integrator, context): the caller keeps both, or the Context is freed."""
-    import openmm
+def _start(model):
+    """(positions, rigid velocities at 300 K, bodies) of a model: one start for every run of it."""
     bodies = common.benzene_bodies(model.system.getNumParticles())
     x = np.array(model.positions.value_in_unit(unit.nanometer))
+    return x, common.rigid_velocities(model.system, x, bodies, 300.0, seed=2), bodies
+
+
+def _context(model, initial, method, platform_name):
+    """(integrator, context): the caller keeps both, or the Context is freed."""
+    import openmm
+    x, v, bodies = initial
     integrator = common.make_integrator(method, 2 * common.FS, bodies=bodies)
     plat, props = common.platform(platform_name, 1)
     context = openmm.Context(model.system, integrator, plat, props)
     context.setPositions(x)
-    context.setVelocities(common.rigid_velocities(model.system, x, bodies, 300.0, seed=2))
+    context.setVelocities(v)
     return integrator, context
 
 
@@ -29,8 +35,9 @@ def compare(platforms, batches, batch_seconds, log):
               "27-benzene cluster": mrattle.models.benzeneCluster(temperature=250 * unit.kelvin, seed=1)}
     rows = []
     for label, model in models.items():
+        initial = _start(model)
         for platform_name in platforms:
-            contexts = {m: _context(model, m, platform_name) for m in ("M-RATTLE", "splitting")}
+            contexts = {m: _context(model, initial, m, platform_name) for m in ("M-RATTLE", "splitting")}
             runs = {m: pair[0] for m, pair in contexts.items()}
             steps = {}
             for method, integrator in runs.items():
