@@ -78,6 +78,8 @@ protected:
     RigidBodyIntegrator();
     /** The kernel's name; the kernel must derive from RigidBodyKernel. */
     virtual std::string getStepKernelName() const = 0;
+    /** One step by the kernel, through its own interface (whose execute() takes this integrator's class). */
+    virtual void executeStep(OpenMM::Kernel& kernel, OpenMM::ContextImpl& context, bool& forcesAreValid) = 0;
 
     void initialize(OpenMM::ContextImpl& context) override;
     void cleanup() override;

@@ -263,7 +263,7 @@ void RigidBodyIntegrator::step(int steps) {
         // A getState() may have overwritten the forces with other force groups.
         if (context->getLastForceGroups() != getIntegrationForceGroups())
             forcesAreValid = false;
-        stepKernel.execute(*context, *this, forcesAreValid);
+        executeStep(kernel, *context, forcesAreValid);
         lastStepCount = context->getStepCount();
     }
 }
