@@ -102,6 +102,56 @@ double RigidBodyIntegrator::computeSystemTemperature() {
     return 2 * computeKineticEnergy() / (dof * BOLTZ);
 }
 
+double RigidBodyIntegrator::kineticEnergyPart(int part) {
+    requireContext();
+    double energies[3];
+    kernel.getAs<RigidBodyKernel>().computeKineticEnergies(*context, energies[0], energies[1], energies[2]);
+    return energies[part];
+}
+
+double RigidBodyIntegrator::computeTranslationalKineticEnergy() {
+    return kineticEnergyPart(0);
+}
+
+double RigidBodyIntegrator::computeRotationalKineticEnergy() {
+    return kineticEnergyPart(1);
+}
+
+double RigidBodyIntegrator::computeFreeKineticEnergy() {
+    return kineticEnergyPart(2);
+}
+
+double RigidBodyIntegrator::getTranslationalDegreesOfFreedom() const {
+    return getTopology().getTranslationalDegreesOfFreedom();
+}
+
+int RigidBodyIntegrator::getRotationalDegreesOfFreedom() const {
+    return getTopology().getRotationalDegreesOfFreedom(kernel.getAs<const RigidBodyKernel>().getBodyDegreesOfFreedom());
+}
+
+double RigidBodyIntegrator::getFreeDegreesOfFreedom() const {
+    return getTopology().getFreeDegreesOfFreedom();
+}
+
+namespace {
+/** 2 KE / (dof k_B); 0 without degrees of freedom. */
+double temperatureOf(double kineticEnergy, double dof) {
+    return dof > 0 ? 2 * kineticEnergy / (dof * BOLTZ) : 0.0;
+}
+} // namespace
+
+double RigidBodyIntegrator::computeTranslationalTemperature() {
+    return temperatureOf(computeTranslationalKineticEnergy(), getTranslationalDegreesOfFreedom());
+}
+
+double RigidBodyIntegrator::computeRotationalTemperature() {
+    return temperatureOf(computeRotationalKineticEnergy(), getRotationalDegreesOfFreedom());
+}
+
+double RigidBodyIntegrator::computeFreeTemperature() {
+    return temperatureOf(computeFreeKineticEnergy(), getFreeDegreesOfFreedom());
+}
+
 void RigidBodyIntegrator::initialize(ContextImpl& contextRef) {
     if (owner != nullptr && &contextRef.getOwner() != owner)
         throw OpenMMException("This Integrator is already bound to a context");

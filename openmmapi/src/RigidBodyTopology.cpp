@@ -163,6 +163,32 @@ RigidBodyTopology::RigidBodyTopology(const System& system, const vector<vector<i
     }
 }
 
+namespace {
+/** The share of a CMMotionRemover's 3 degrees of freedom that mass carries, of a total mass. */
+double removedShare(double mass, double totalMass) {
+    return totalMass > 0 ? 3 * mass / totalMass : 0.0;
+}
+} // namespace
+
+double RigidBodyTopology::getTranslationalDegreesOfFreedom() const {
+    double bodies = 0, free = 0;
+    for (double mass : bodyMass)
+        bodies += mass;
+    for (int i : freeParticles)
+        free += masses[i];
+    return 3.0 * getNumBodies() - (hasCMMotionRemover ? removedShare(bodies, bodies + free) : 0.0);
+}
+
+int RigidBodyTopology::getRotationalDegreesOfFreedom(int bodyDegreesOfFreedom) const {
+    return bodyDegreesOfFreedom - 3 * getNumBodies();
+}
+
+double RigidBodyTopology::getFreeDegreesOfFreedom() const {
+    const int unconstrained = 3 * (int) freeParticles.size() - (int) freeConstraints.size();
+    return hasCMMotionRemover ? unconstrained - (3.0 - (3.0 * getNumBodies() - getTranslationalDegreesOfFreedom()))
+                              : unconstrained;
+}
+
 int RigidBodyTopology::getNumDegreesOfFreedom(int bodyDegreesOfFreedom) const {
     int dof = 3 * (int) freeParticles.size() - (int) freeConstraints.size() + bodyDegreesOfFreedom;
     if (hasCMMotionRemover)

@@ -2,6 +2,7 @@
 #define MRATTLE_COMMON_KERNELS_H_
 
 #include "BodyShapeConstraints.h"
+#include "CommonBodyKineticEnergy.h"
 #include "internal/RigidBodyKernels.h"
 #include "mrattle/RigidBodyMath.h"
 #include "openmm/common/ComputeArray.h"
@@ -34,6 +35,8 @@ public:
     std::vector<OpenMM::Vec3> getVelocitiesForTemperature(OpenMM::ContextImpl& context, double temperature,
                                                           int randomSeed, double tolerance) override;
     double computeKineticEnergy(OpenMM::ContextImpl& context) override;
+    void computeKineticEnergies(OpenMM::ContextImpl& context, double& translational, double& rotational,
+                                double& free) override;
     bool isBodyLinear(int index) const override;
     int getBodyDegreesOfFreedom() const override;
     void createCheckpoint(OpenMM::ContextImpl& context, std::ostream& stream) const override;
@@ -68,6 +71,7 @@ private:
         projectBodies, constrainFreeVelocities, langevinNoise, backupState;
     bool langevin = false;
     std::unique_ptr<BodyShapeConstraints> shapeConstraints;
+    std::unique_ptr<CommonBodyKineticEnergy> bodyKineticEnergy;  // after the arrays it reads
 };
 
 } // namespace MRattlePlugin

@@ -128,6 +128,7 @@ void CommonIntegrateMRattleStepKernel::initialize(const System& system, const Ri
     failure.upload(vector<int>(1, 0));
     mapAtoms();
     cc.addReorderListener(new ReorderListener(*this));
+    bodyKineticEnergy.reset(new CommonBodyKineticEnergy(cc, numBodies, bodyStart, bodyAtoms));
 
     for (int f = 0; f < system.getNumForces(); f++)
         if (const AndersenThermostat* thermostat = dynamic_cast<const AndersenThermostat*>(&system.getForce(f))) {
@@ -511,6 +512,13 @@ double CommonIntegrateMRattleStepKernel::computeKineticEnergy(ContextImpl& conte
     ContextSelector selector(cc);
     checkFailure();
     return cc.getIntegrationUtilities().computeKineticEnergy(0.0);
+}
+
+void CommonIntegrateMRattleStepKernel::computeKineticEnergies(ContextImpl& context, double& translational,
+                                                              double& rotational, double& free) {
+    ContextSelector selector(cc);
+    checkFailure();
+    bodyKineticEnergy->compute(translational, rotational, free);
 }
 
 bool CommonIntegrateMRattleStepKernel::isBodyLinear(int index) const {
