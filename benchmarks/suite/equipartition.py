@@ -298,4 +298,35 @@ def report(rows, by_model, quick, equilibrate_ps, discard_ps, production_ps, sam
         published = ('published: equipartition' if step == 0.5 else
                      'published: T_rot below T_trans' if step <= 3 else 'beyond the published range')
         md.append('- **%g fs** (%s): %s.' % (step, published, '; '.join(parts) or 'not run'))
+    pairs = []
+    for r in rows:
+        if r['method'] == METHODS[0] and r['failure'] is None:
+            other = [o for o in rows if o['model'] == r['model'] and o['step_fs'] == r['step_fs']
+                     and o['method'] == METHODS[1] and o['failure'] is None]
+            if other:
+                (d1, e1), (d2, e2) = r['difference'], other[0]['difference']
+                pairs.append('%s %g fs %.1f' % (r['model'], r['step_fs'], abs(d1 - d2) / math.hypot(e1, e2)))
+    if pairs:
+        md.append('\nA check of the error bars: M-RATTLE and Verlet + SETTLE (on-step) integrate the same equations '
+                  '(both are RATTLE) from the same start: their trajectories differ only by round-off, which grows '
+                  'chaotically, so their T_rot - T_trans should differ only by the statistical error. Their '
+                  'differences, in '
+                  'combined standard errors: %s. Values well above 2 mean the block error bars understate the '
+                  'scatter at this run length, and the verdicts above are to be read with that.' % ', '.join(pairs))
     return md
+
+
+def rows_from_csv(path):
+    """The rows of a CSV that run() or run_model() wrote (to report a run, or a run cut short)."""
+    rows = []
+    with open(path) as stream:
+        for r in csv.DictReader(stream):
+            row = dict(model=r['model'], method=r['method'], step_fs=float(r['step_fs']), failure=r['failure'] or None,
+                       steps=int(r['steps']), wall_s=float(r['wall_s']))
+            if row['failure'] is None:
+                row['Ttrans'] = (float(r['Ttrans']), float(r['Ttrans_se']))
+                row['Trot'] = (float(r['Trot']), float(r['Trot_se']))
+                row['difference'] = (float(r['Trot_minus_Ttrans']), float(r['difference_se']))
+                row['drift'] = float(r['drift_kJ_per_mol_ns_molecule'])
+            rows.append(row)
+    return rows
