@@ -85,6 +85,8 @@ public:
     const std::vector<double>& getMasses() const { return masses; }
 
 private:
+    /** The part of a CMMotionRemover's 3 degrees of freedom taken from the free particles: their share of the mass. */
+    double removedFromFree() const;
     std::vector<std::vector<int> > bodies;
     std::vector<int> bodyOfParticle;
     std::vector<int> freeParticles;

@@ -13,6 +13,13 @@ using namespace MRattlePlugin;
 using namespace OpenMM;
 using std::vector;
 
+namespace {
+/** 2 KE / (dof k_B); 0 without degrees of freedom. */
+double temperatureOf(double kineticEnergy, double dof) {
+    return dof > 0 ? 2 * kineticEnergy / (dof * BOLTZ) : 0.0;
+}
+} // namespace
+
 RigidBodyIntegrator::RigidBodyIntegrator() {
     setConstraintTolerance(1e-5);
 }
@@ -96,10 +103,7 @@ int RigidBodyIntegrator::getNumDegreesOfFreedom() const {
 
 double RigidBodyIntegrator::computeSystemTemperature() {
     requireContext();
-    const int dof = getNumDegreesOfFreedom();
-    if (dof <= 0)
-        return 0.0;
-    return 2 * computeKineticEnergy() / (dof * BOLTZ);
+    return temperatureOf(computeKineticEnergy(), getNumDegreesOfFreedom());
 }
 
 double RigidBodyIntegrator::kineticEnergyPart(int part) {
@@ -133,12 +137,6 @@ double RigidBodyIntegrator::getFreeDegreesOfFreedom() const {
     return getTopology().getFreeDegreesOfFreedom();
 }
 
-namespace {
-/** 2 KE / (dof k_B); 0 without degrees of freedom. */
-double temperatureOf(double kineticEnergy, double dof) {
-    return dof > 0 ? 2 * kineticEnergy / (dof * BOLTZ) : 0.0;
-}
-} // namespace
 
 double RigidBodyIntegrator::computeTranslationalTemperature() {
     return temperatureOf(computeTranslationalKineticEnergy(), getTranslationalDegreesOfFreedom());

@@ -163,20 +163,8 @@ RigidBodyTopology::RigidBodyTopology(const System& system, const vector<vector<i
     }
 }
 
-namespace {
-/** The share of a CMMotionRemover's 3 degrees of freedom that mass carries, of a total mass. */
-double removedShare(double mass, double totalMass) {
-    return totalMass > 0 ? 3 * mass / totalMass : 0.0;
-}
-} // namespace
-
 double RigidBodyTopology::getTranslationalDegreesOfFreedom() const {
-    double bodies = 0, free = 0;
-    for (double mass : bodyMass)
-        bodies += mass;
-    for (int i : freeParticles)
-        free += masses[i];
-    return 3.0 * getNumBodies() - (hasCMMotionRemover ? removedShare(bodies, bodies + free) : 0.0);
+    return 3.0 * getNumBodies() - (hasCMMotionRemover ? 3.0 - removedFromFree() : 0.0);
 }
 
 int RigidBodyTopology::getRotationalDegreesOfFreedom(int bodyDegreesOfFreedom) const {
@@ -184,9 +172,18 @@ int RigidBodyTopology::getRotationalDegreesOfFreedom(int bodyDegreesOfFreedom) c
 }
 
 double RigidBodyTopology::getFreeDegreesOfFreedom() const {
-    const int unconstrained = 3 * (int) freeParticles.size() - (int) freeConstraints.size();
-    return hasCMMotionRemover ? unconstrained - (3.0 - (3.0 * getNumBodies() - getTranslationalDegreesOfFreedom()))
-                              : unconstrained;
+    const double unconstrained = 3.0 * freeParticles.size() - (double) freeConstraints.size();
+    return unconstrained - (hasCMMotionRemover ? removedFromFree() : 0.0);
+}
+
+double RigidBodyTopology::removedFromFree() const {
+    double bodies = 0, free = 0;
+    for (double mass : bodyMass)
+        bodies += mass;
+    for (int i : freeParticles)
+        free += masses[i];
+    // With no massive particle at all, the 3 come off the free ones, as getNumDegreesOfFreedom() takes them.
+    return bodies + free > 0 ? 3 * free / (bodies + free) : 3.0;
 }
 
 int RigidBodyTopology::getNumDegreesOfFreedom(int bodyDegreesOfFreedom) const {

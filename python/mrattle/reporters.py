@@ -86,14 +86,15 @@ class StateDataReporter(app.StateDataReporter):
 
     def _constructHeaders(self):
         headers = super()._constructHeaders()
-        index = self._bodyColumnIndex(headers)
+        self._bodyIndex = self._bodyColumnIndex(headers)
+        index = self._bodyIndex
         return headers[:index] + [name for name, _ in self._bodyColumns] + headers[index:]
 
     def _constructReportValues(self, simulation, state):
         values = super()._constructReportValues(simulation, state)
         if not self._bodyColumns:
             return values
-        index = self._bodyColumnIndex(super()._constructHeaders())
+        index = self._bodyIndex
         extra = [getattr(self._bodyIntegrator, method)().value_in_unit(unit.kelvin) for _, method in self._bodyColumns]
         return values[:index] + extra + values[index:]
 
