@@ -74,6 +74,15 @@ public:
                                                                   int randomSeed, double tolerance) = 0;
     /** Sum of m v^2 / 2 over the Context's velocities. */
     virtual double computeKineticEnergy(OpenMM::ContextImpl& context) = 0;
+    /**
+     * computeKineticEnergy() split three ways, from the same velocities: translational, the
+     * sum of M V^2 / 2 over the bodies (M a body's mass, V its centre-of-mass velocity);
+     * rotational, the sum over the bodies of m |v - V|^2 / 2 over their atoms; free, the sum
+     * of m v^2 / 2 over the massive particles of no body. The three add up to
+     * computeKineticEnergy() to round-off.
+     */
+    virtual void computeKineticEnergies(OpenMM::ContextImpl& context, double& translational, double& rotational,
+                                        double& free) = 0;
     /** Whether body number index is linear (collinear atoms, 5 degrees of freedom) at the last positions set. */
     virtual bool isBodyLinear(int index) const = 0;
     /** The bodies' degrees of freedom at the last positions set: 6 each, 5 if linear, 3 if its atoms coincide. */

@@ -2,6 +2,7 @@
 #define MRATTLE_COMMON_RIGID_BODY_DYNAMICS_H_
 
 #include "BodyShapeConstraints.h"
+#include "CommonBodyKineticEnergy.h"
 #include "RigidBodyTopology.h"
 #include "mrattle/RigidBodyMath.h"
 #include "openmm/System.h"
@@ -82,6 +83,8 @@ public:
     std::vector<OpenMM::Vec3> velocitiesForTemperature(OpenMM::ContextImpl& context, double temperature, int randomSeed,
                                                        double tolerance);
     double kineticEnergy();
+    /** The kinetic energy of the bodies' translation, their rotation, and the free particles. */
+    void kineticEnergies(double& translational, double& rotational, double& free);
     bool isLinear(int body) const {
         return shapes[body] == RigidBodyMath::Shape::Linear;
     }
@@ -106,6 +109,7 @@ private:
     std::vector<RigidBodyMath::Shape> shapes;
     std::vector<double> inverseMasses;
     std::unique_ptr<BodyShapeConstraints> shapeConstraints;
+    std::unique_ptr<CommonBodyKineticEnergy> bodyKineticEnergy;  // reads bodyStart and bodyAtoms
     int numBodies = 0, numClusters = 0;
     bool hasAndersen = false, argumentsSet = false;
     /** Set by OpenMM's reorder of atoms: the force buffer then belongs to the old order. */

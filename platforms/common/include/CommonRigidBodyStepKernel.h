@@ -46,6 +46,11 @@ public:
         OpenMM::ContextSelector selector(dynamics.computeContext());
         return dynamics.kineticEnergy();
     }
+    void computeKineticEnergies(OpenMM::ContextImpl& context, double& translational, double& rotational,
+                                double& free) override {
+        OpenMM::ContextSelector selector(dynamics.computeContext());
+        dynamics.kineticEnergies(translational, rotational, free);
+    }
     bool isBodyLinear(int index) const override {
         return dynamics.isLinear(index);
     }

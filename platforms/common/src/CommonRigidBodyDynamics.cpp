@@ -143,6 +143,7 @@ void CommonRigidBodyDynamics::initialize(const System& system, const RigidBodyTo
     velmBackup.initialize(cc, cc.getPaddedNumAtoms(), vectorSize, "mrattleVelmBackup");
     mapAtoms();
     cc.addReorderListener(new ReorderListener(*this));
+    bodyKineticEnergy.reset(new CommonBodyKineticEnergy(cc, numBodies, bodyStart, bodyAtoms));
     for (int f = 0; f < system.getNumForces(); f++)
         if (const AndersenThermostat* thermostat = dynamic_cast<const AndersenThermostat*>(&system.getForce(f))) {
             hasAndersen = true;
@@ -490,6 +491,10 @@ vector<Vec3> CommonRigidBodyDynamics::velocitiesForTemperature(ContextImpl& cont
 
 double CommonRigidBodyDynamics::kineticEnergy() {
     return cc.getIntegrationUtilities().computeKineticEnergy(0.0);
+}
+
+void CommonRigidBodyDynamics::kineticEnergies(double& translational, double& rotational, double& free) {
+    bodyKineticEnergy->compute(translational, rotational, free);
 }
 
 int CommonRigidBodyDynamics::bodyDegreesOfFreedom() const {

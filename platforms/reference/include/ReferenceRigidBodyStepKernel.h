@@ -76,6 +76,10 @@ public:
     double computeKineticEnergy(OpenMM::ContextImpl& context) override {
         return dynamics->kineticEnergy(ReferenceRigidBodyDynamics::velocities(context));
     }
+    void computeKineticEnergies(OpenMM::ContextImpl& context, double& translational, double& rotational,
+                                double& free) override {
+        dynamics->kineticEnergies(ReferenceRigidBodyDynamics::velocities(context), translational, rotational, free);
+    }
     bool isBodyLinear(int index) const override {
         return dynamics->isLinear(index);
     }

@@ -287,6 +287,26 @@ double ReferenceRigidBodyDynamics::kineticEnergy(const vector<Vec3>& velocities)
     return energy;
 }
 
+void ReferenceRigidBodyDynamics::kineticEnergies(const vector<Vec3>& velocities, double& translational,
+                                                 double& rotational, double& free) const {
+    translational = rotational = free = 0;
+    for (int b = 0; b < bodies.getNumBodies(); b++) {
+        const vector<int>& atoms = bodies.getBodyParticles(b);
+        Vec3 momentum;
+        for (int i : atoms)   // body members are massive
+            momentum += velocities[i] / inverseMass[i];
+        const double mass = bodies.getBodyMass(b);
+        const Vec3 center = momentum / mass;
+        translational += 0.5 * mass * center.dot(center);
+        for (int i : atoms) {
+            const Vec3 relative = velocities[i] - center;
+            rotational += 0.5 * relative.dot(relative) / inverseMass[i];
+        }
+    }
+    for (int i : bodies.getFreeParticles())
+        free += 0.5 * velocities[i].dot(velocities[i]) / inverseMass[i];
+}
+
 vector<Vec3> ReferenceRigidBodyDynamics::velocitiesForTemperature(vector<Vec3>& positions, double temperature,
                                                                   int randomSeed, double tolerance) {
     // Maxwell-Boltzmann per particle, then the rigid-body projection (which keeps the
