@@ -129,3 +129,23 @@ def test_nve_energy_has_no_jumps_past_reorderings(devicePlatform):
         energies = totalEnergies(context, integrator, 22, 50)  # 1100 steps: four reorderings
         jumps[name] = np.abs(np.diff(energies)).max()
     assert jumps['M-RATTLE'] < 3*jumps['Verlet+SETTLE'] + 1.0, jumps
+
+
+def test_langevin_temperature_past_reorderings(devicePlatform):
+    """The bath's temperature, within its error bar, over a run with four reorderings (the
+    stale forces after each one heated a 300 K water box to 349 +- 3 K). Block averages of
+    the rigid-body kinetic temperature; the error bar is the blocks' standard error."""
+    model = mrattle.models.waterBox(numMolecules=216, cutoff=0.9*unit.nanometers)
+    integrator = mrattle.MRattleLangevinIntegrator(300*unit.kelvin, 5/unit.picosecond, 1*unit.femtoseconds)
+    integrator.setRandomNumberSeed(11)
+    context = openmm.Context(model.system, integrator, devicePlatform, {'Precision': 'mixed'})
+    context.setPositions(model.positions)
+    context.setVelocitiesToTemperature(300*unit.kelvin, 2)
+    integrator.step(200)
+    temperatures = []
+    for _ in range(100):  # 1000 steps
+        integrator.step(10)
+        temperatures.append(integrator.computeSystemTemperature().value_in_unit(unit.kelvin))
+    blocks = np.array(temperatures).reshape(10, 10).mean(axis=1)
+    mean, error = blocks.mean(), blocks.std(ddof=1)/np.sqrt(len(blocks))
+    assert abs(mean - 300) < 4*error + 2, (mean, error)
