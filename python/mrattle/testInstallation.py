@@ -1,0 +1,57 @@
+"""Check an installation, as OpenMM's ``python -m openmm.testInstallation`` does:
+
+    python3 -m mrattle.testInstallation
+
+lists the platforms that have the plugin's kernels, then runs the 27-benzene cluster for
+20 steps of MRattleIntegrator on each and compares the positions with Reference's. Exits
+non-zero if a platform fails or disagrees.
+"""
+import sys
+
+import numpy as np
+import openmm
+from openmm import unit
+
+import mrattle
+
+#: Largest position difference from Reference after the run, per platform (nm): device
+#: platforms in their default single precision round far more than in double.
+AGREEMENT = {'double': 1e-8, 'mixed': 1e-6, 'single': 1e-4}
+STEPS = 20
+
+
+def runOn(platformName, model):
+    integrator = mrattle.MRattleIntegrator(2*unit.femtoseconds)
+    context = openmm.Context(model.system, integrator, openmm.Platform.getPlatformByName(platformName))
+    context.setPositions(model.positions)
+    context.setVelocitiesToTemperature(300*unit.kelvin, 1)
+    integrator.step(STEPS)
+    return context.getState(getPositions=True).getPositions(asNumpy=True).value_in_unit(unit.nanometers)
+
+
+def main():
+    print('OpenMM %s, M-RATTLE plugin from %s' % (openmm.Platform.getOpenMMVersion(), mrattle.__file__))
+    print('Platforms with the plugin\'s kernels: %s' % ', '.join(mrattle.PLATFORMS))
+    model = mrattle.models.benzeneCluster()
+    reference = runOn('Reference', model)
+    failures = 0
+    for name in mrattle.PLATFORMS:
+        try:
+            positions = runOn(name, model)
+        except Exception as error:  # a platform present but unusable here (no device, ...)
+            print('  %-10s failed: %s' % (name, error))
+            failures += 1
+            continue
+        difference = float(np.abs(positions - reference).max())
+        precision = openmm.Platform.getPlatformByName(name).getPropertyDefaultValue('Precision') \
+            if name in mrattle.DEVICE_PLATFORMS else 'double'
+        limit = AGREEMENT[precision]
+        verdict = 'agrees' if difference <= limit else 'DISAGREES'
+        failures += (difference > limit)
+        print('  %-10s %s with Reference: %.2e nm after %d steps (%s precision, limit %.0e)'
+              % (name, verdict, difference, STEPS, precision, limit))
+    return 1 if failures else 0
+
+
+if __name__ == '__main__':
+    sys.exit(main())
