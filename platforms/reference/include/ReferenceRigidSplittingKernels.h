@@ -13,6 +13,9 @@ public:
 
 protected:
     void integratePositions(OpenMM::ContextImpl& context, const RigidBodyIntegrator& integrator) override;
+    const char* integratorName() const override {
+        return "RigidSplittingIntegrator";
+    }
 };
 
 } // namespace MRattlePlugin
