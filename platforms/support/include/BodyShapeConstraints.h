@@ -17,12 +17,15 @@ namespace MRattlePlugin {
  * Only bodies off that geometry by more than Tolerance are moved (by OpenMM's own
  * constraint code: SETTLE for water, CCMA otherwise): bodies already on it keep their exact
  * rigid shape. A body whose constraints do not converge (singular, e.g. planar) keeps the
- * shape it was given. Used by every platform's kernels on the host.
+ * shape it was given. Bodies that RigidBodyMath::classifyShape() finds linear but whose
+ * atoms are off their axis (a bent CO2 from 3-decimal coordinates) are then placed on it,
+ * keeping their centre of mass, so that every platform integrates the same straight body.
+ * Used by every platform's kernels on the host.
  */
 class BodyShapeConstraints {
 public:
     BodyShapeConstraints(const OpenMM::System& system, const RigidBodyTopology& topology);
-    /** Move the bodies that are off their constraint geometry onto it; true if any moved. */
+    /** Move the bodies that are off their constraint geometry onto it, then straighten near-linear bodies; true if any moved. */
     bool apply(std::vector<OpenMM::Vec3>& positions) const;
     /** The largest relative error of a body's shape constraints at these positions. */
     double error(const std::vector<OpenMM::Vec3>& positions, int body) const;
@@ -30,6 +33,10 @@ public:
     static constexpr double Tolerance = 1e-6;
 
 private:
+    /** Place the atoms of each near-linear body on its axis; true if any moved. */
+    bool straighten(std::vector<OpenMM::Vec3>& positions) const;
+    /** The constraint-geometry correction alone. */
+    bool applyConstraints(std::vector<OpenMM::Vec3>& positions) const;
     RigidBodyTopology topology;
     std::vector<double> inverseMasses;
     std::unique_ptr<OpenMM::ReferenceConstraints> constraints;
