@@ -75,11 +75,11 @@ public:
         std::vector<OpenMM::Vec3>& velocities = ReferenceRigidBodyDynamics::velocities(context);
         requireFinite(velocities, "velocity");
         const std::vector<OpenMM::Vec3> given = velocities;  // only when velocities are set, not in the step
-        dynamics->projectNonRigidVelocities(ReferenceRigidBodyDynamics::positions(context), velocities, tolerance);
         try {
+            dynamics->projectNonRigidVelocities(ReferenceRigidBodyDynamics::positions(context), velocities, tolerance);
             requireFinite(velocities, "velocity projected at the current positions (a degenerate constraint?)");
         } catch (...) {
-            velocities = given;
+            velocities = given;  // a refused projection (not finite, or constraints not converged) changes nothing
             throw;
         }
     }
