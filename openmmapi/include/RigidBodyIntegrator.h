@@ -121,7 +121,10 @@ private:
     long long lastStepCount = -1;
     /** A refused checkpoint left mixed data: stepping waits for Context::reinitialize() or a checkpoint that fits. */
     bool refusedCheckpoint = false;
-    /** The last positions or velocities set were not finite: stepping waits until finite ones are set. */
+    /**
+     * The last positions or velocities set were not finite (or the velocities could not be
+     * made rigid at the positions): stepping waits until new ones are set.
+     */
     bool positionsNotFinite = false, velocitiesNotFinite = false;
     /** Positions were set (or loaded): rigid-body velocities are defined only relative to them. */
     bool positionsSet = false;

@@ -185,12 +185,11 @@ void RigidBodyIntegrator::stateChanged(State::DataType changed) {
                 stepKernel.projectVelocities(*context, getConstraintTolerance());
             } catch (const OpenMMException& e) {
                 // The kernel left the velocities as they were. Name the call that raised it.
-                if (changed == State::Positions) {
-                    velocitiesNeedProjection = true;  // step() projects again, and refuses if it still fails
-                    throw OpenMMException(std::string("setPositions: the velocities cannot be made rigid at these "
-                                                      "positions: ") + e.what());
-                }
                 velocitiesNotFinite = true;
+                if (changed == State::Positions)
+                    throw OpenMMException(std::string("setPositions: the Context's velocities (set before these "
+                                                      "positions) cannot be made rigid at them: ") + e.what() +
+                                          "; the integrator will not step until velocities are set again");
                 throw OpenMMException(std::string("setVelocities: ") + e.what() + "; the integrator will not step "
                                       "until finite velocities are set");
             }
@@ -259,9 +258,11 @@ void RigidBodyIntegrator::step(int steps) {
         throw OpenMMException(std::string("step: the last loadCheckpoint() was refused. ") + RefusedCheckpointRecovery);
     if (!positionsSet)
         throw OpenMMException("step: the Context's positions have not been set");
-    if (positionsNotFinite || velocitiesNotFinite)
-        throw OpenMMException(std::string("step: the Context's ") + (positionsNotFinite ? "positions" : "velocities") +
-                              " are not finite; set finite ones before stepping");
+    if (positionsNotFinite)
+        throw OpenMMException("step: the Context's positions are not finite; set finite ones before stepping");
+    if (velocitiesNotFinite)
+        throw OpenMMException("step: the Context's velocities are not finite, or could not be made rigid at its "
+                              "positions; set velocities again before stepping");
     RigidBodyKernel& stepKernel = kernel.getAs<RigidBodyKernel>();
     for (int i = 0; i < steps; i++) {
         // Another integrator (of a CompoundIntegrator) stepped since this one did, or
