@@ -7,7 +7,8 @@
  *   makes them differ at round-off, as it does for OpenMM's VerletIntegrator;
  * - a checkpoint that does not fit (other bodies, another integrator, unknown format,
  *   truncated, damaged) is refused with an OpenMMException that says what differs, and
- *   the Context then refuses to step until positions and velocities are set again;
+ *   the Context then refuses to step until Context::reinitialize() (issue 22: OpenMM's
+ *   own part of a damaged checkpoint can leave garbage only reinitialize() clears);
  * - setState() and setVelocities() give rigid velocities back bit for bit;
  * - stepping writes no Context checkpoint, whatever global parameters a refused
  *   checkpoint left behind.
@@ -291,8 +292,9 @@ namespace {
 
 /**
  * Loading a bad checkpoint throws an OpenMMException whose message contains each of the
- * expected phrases and says what to do; stepping is refused until positions and
- * velocities are set again, after which the run is the one a good checkpoint gives.
+ * expected phrases and says what to do; stepping is refused, setState() or not, until
+ * Context::reinitialize(); then with the state set again the run is the one a good
+ * checkpoint gives.
  */
 void expectRefusedUntilStateIsSet(TestRun& run, const string& badCheckpoint, const vector<string>& phrases) {
     string good = checkpointOf(*run.context);
@@ -300,18 +302,15 @@ void expectRefusedUntilStateIsSet(TestRun& run, const string& badCheckpoint, con
     string message = messageOf([&] { loadCheckpoint(*run.context, badCheckpoint); });
     for (const string& phrase : phrases)
         EXPECT_NE(string::npos, message.find(phrase)) << "'" << phrase << "' not in: " << message;
-    EXPECT_NE(string::npos, message.find("set positions and velocities again")) << message;
+    EXPECT_NE(string::npos, message.find("call Context::reinitialize()")) << message;
 
     string refusal = messageOf([&] { run.integrator->step(1); });
     EXPECT_NE(string::npos, refusal.find("loadCheckpoint() was refused")) << refusal;
     run.context->setPositions(saved.getPositions());
     EXPECT_THROW(run.integrator->step(1), OpenMMException) << "stepped with the checkpoint's velocities";
-    const string platformName = run.context->getPlatform().getName();
-    if (platformName != "Reference" && platformName != "CPU") {
-        // OpenCL keeps charges and masses in the position and velocity arrays the checkpoint overwrote.
-        EXPECT_NE(string::npos, message.find("reinitialize()")) << message;
-        run.context->reinitialize();
-    }
+    run.context->setState(saved);
+    EXPECT_THROW(run.integrator->step(1), OpenMMException) << "stepped before reinitialize()";
+    run.context->reinitialize();
     run.context->setState(saved);
     run.integrator->step(10);
     Snapshot afterRefusal = snapshot(*run.context);
@@ -465,9 +464,16 @@ TEST_P(Checkpoint, SteppingWritesNoCheckpointEvenWithJunkLeftByARefusedOne) {
     };
     run.context->setParameter(AndersenThermostat::Temperature(), 310);
     State saved = run.context->getState(State::Positions | State::Velocities | State::Parameters);
-    EXPECT_THROW(loadCheckpoint(*run.context, junkCheckpoint), OpenMMException);
+    const string refusal = messageOf([&] { loadCheckpoint(*run.context, junkCheckpoint); });
     EXPECT_EQ(1, run.context->getParameters().count("junk")) << "OpenMM left the checkpoint's parameter";
     run.context->setState(saved);
+    // Refused by the integrator (OpenCL's own part may refuse it first: other precision).
+    if (refusal.find("OpenMM had already loaded") != string::npos) {
+        EXPECT_THROW(run.integrator->step(1), OpenMMException) << "stepped with the junk before reinitialize()";
+        run.context->reinitialize();
+        EXPECT_EQ(0, run.context->getParameters().count("junk")) << "reinitialize() clears the checkpoint's parameter";
+        run.context->setState(saved);
+    }
     const int before = written();
     for (int i = 0; i < 50; i++) {
         run.context->setParameter(AndersenThermostat::Temperature(), 300 + i);

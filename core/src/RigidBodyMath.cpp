@@ -61,7 +61,7 @@ RotationSolve solveLinearRotation(const BodyView& body, const double* oldPositio
         j += m * s * s;
     }
     result.iterations = 1;
-    if (j == 0) {   // all atoms at the centre: nothing to rotate
+    if (isPointExtent(j, body.totalMass)) {   // a point: nothing to rotate
         result.converged = true;
         return result;
     }
@@ -103,7 +103,20 @@ Matrix3d secondMoment(const BodyView& body, const double* positions, const Vecto
 bool isLinearShape(const Matrix3d& secondMoment) {
     Eigen::SelfAdjointEigenSolver<Matrix3d> solver(secondMoment, Eigen::EigenvaluesOnly);
     const Vector3d& ev = solver.eigenvalues();  // ascending
-    return ev(1) <= 1e-12 * ev(2);
+    // Principal moments tr(J) - ev: the smallest is ev(0) + ev(1), the largest ev(1) + ev(2).
+    return ev(0) + ev(1) <= LinearMomentRatio * (ev(1) + ev(2));
+}
+
+Vector3d axisToStraighten(const Matrix3d& secondMoment, double totalMass) {
+    if (classifyShape(secondMoment, totalMass) != Shape::Linear)
+        return Vector3d::Zero();
+    Eigen::SelfAdjointEigenSolver<Matrix3d> solver(secondMoment);
+    const Vector3d& ev = solver.eigenvalues();
+    // Within 1e-6 of its size of its axis (a single-precision platform's round-off) already:
+    // leave the atoms bit for bit (the linear arithmetic is exact to that).
+    if (ev(0) + ev(1) <= 1e-12 * ev(2))
+        return Vector3d::Zero();
+    return solver.eigenvectors().col(2);
 }
 
 namespace {
@@ -127,7 +140,7 @@ Matrix3d rotationMinusIdentity(const Vector3d& d) {
 } // namespace
 
 Shape classifyShape(const Matrix3d& secondMoment, double totalMass) {
-    if (!(secondMoment.trace() > 1e-20 * totalMass))
+    if (isPointExtent(secondMoment.trace(), totalMass))
         return Shape::Point;
     return isLinearShape(secondMoment) ? Shape::Linear : Shape::General;
 }
@@ -466,7 +479,8 @@ void rigidMotionSums(const BodyView& body, const double* positions, Velocity vel
         // I = j (1 - u u^T): no spin about the axis.
         const double traceJ = j00 + j11 + j22;
         Vector3d u = linearAxis(body, positions, motion.center);
-        motion.omega = traceJ > 0 ? Vector3d((L - L.dot(u) * u) / traceJ) : Vector3d::Zero();
+        motion.omega = isPointExtent(traceJ, body.totalMass) ? Vector3d::Zero()  // a point does not rotate
+                                                             : Vector3d((L - L.dot(u) * u) / traceJ);
         return;
     }
     sums.j[0] = j00; sums.j[1] = j01; sums.j[2] = j02; sums.j[3] = j11; sums.j[4] = j12; sums.j[5] = j22;

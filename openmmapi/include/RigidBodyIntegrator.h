@@ -129,10 +129,12 @@ protected:
     void createCheckpoint(std::ostream& stream) const override;
     /**
      * Checks the header written by createCheckpoint() and loads the kernel's state. OpenMM
-     * has already overwritten the Context's data when this is called; on any mismatch
-     * (other bodies, another integrator, unknown format, truncated stream) it throws an
-     * OpenMMException saying what is wrong, and refuses to step until positions and
-     * velocities are set again (or a checkpoint that fits is loaded).
+     * has already overwritten the Context's data when this is called (unchecked: a damaged
+     * checkpoint can leave garbage in its random state, box and parameters); on any
+     * mismatch (other bodies, another integrator, unknown format, truncated stream) it
+     * throws an OpenMMException saying what is wrong, has the kernel make the platform's
+     * unchecked state safe, and refuses to step until Context::reinitialize() is called
+     * (then the state is set again) or a checkpoint that fits is loaded.
      */
     void loadCheckpoint(std::istream& stream) override;
 
@@ -151,10 +153,12 @@ private:
     bool velocitiesNeedProjection = false;
     /** The Context's step count after this integrator's last step; another value means another integrator stepped. */
     long long lastStepCount = -1;
-    /** A refused checkpoint left mixed data: stepping waits until positions and velocities are set again. */
+    /** A refused checkpoint left mixed data: stepping waits for Context::reinitialize() or a checkpoint that fits. */
     bool refusedCheckpoint = false;
-    bool positionsSetSinceRefusal = false, velocitiesSetSinceRefusal = false;
-    /** The last positions or velocities set were not finite: stepping waits until finite ones are set. */
+    /**
+     * The last positions or velocities set were not finite (or the velocities could not be
+     * made rigid at the positions): stepping waits until new ones are set.
+     */
     bool positionsNotFinite = false, velocitiesNotFinite = false;
     /** Positions were set (or loaded): rigid-body velocities are defined only relative to them. */
     bool positionsSet = false;

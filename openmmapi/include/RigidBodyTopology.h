@@ -28,7 +28,7 @@ public:
      * Resolve the bodies of a System. Throws OpenMMException naming the body and
      * particle for: an index out of range, a particle listed twice, a massless particle
      * or virtual site listed as a member, a constraint joining a body to a particle
-     * outside it.
+     * outside it; and naming the particle for a mass that is negative or not finite.
      *
      * @param explicitBodies  bodies added to the integrator (empty: use the molecules)
      * @param molecules       the System's molecules, as ContextImpl::getMolecules()

@@ -18,6 +18,14 @@ namespace {
 double temperatureOf(double kineticEnergy, double dof) {
     return dof > 0 ? 2 * kineticEnergy / (dof * BOLTZ) : 0.0;
 }
+
+/** What to do after a refused checkpoint, in the refusal and in every refused step after it. */
+const char* const RefusedCheckpointRecovery =
+    "OpenMM had already loaded its own part of that checkpoint (positions, velocities, time, box, parameters, random "
+    "state), which may be damaged: call Context::reinitialize() (without preserving the state), then set the state "
+    "again (Context::setState() with a saved State, or positions and velocities), or load a checkpoint that fits. "
+    "The integrator will not step until then";
+
 } // namespace
 
 RigidBodyIntegrator::RigidBodyIntegrator() {
@@ -206,12 +214,7 @@ void RigidBodyIntegrator::stateChanged(State::DataType changed) {
         }
         positionsNotFinite = false;
         positionsSet = true;
-        positionsSetSinceRefusal = true;
     }
-    if (changed == State::Velocities)
-        velocitiesSetSinceRefusal = true;
-    if (refusedCheckpoint && positionsSetSinceRefusal && velocitiesSetSinceRefusal)
-        refusedCheckpoint = false;
     // Velocities the user sets are made rigid at once, so what the Context reports is what
     // the integrator uses; rigid ones (a checkpoint's, a saved State's) are kept bit for bit.
     if (changed == State::Positions || changed == State::Velocities) {
@@ -219,18 +222,30 @@ void RigidBodyIntegrator::stateChanged(State::DataType changed) {
         // garbage): they are projected once new ones are set.
         if (loadingCheckpoint)
             velocitiesNotFinite = false;  // a checkpoint's velocities are as they were written
+        else if (changed == State::Positions && velocitiesNotFinite) {
+            // The velocities last set were refused: nothing to project; step() waits for finite ones.
+        }
         else if (isCurrentIntegrator() && positionsSet && !refusedCheckpoint) {
             try {
                 stepKernel.projectVelocities(*context, getConstraintTolerance());
             } catch (const OpenMMException& e) {
+                // The kernel left the velocities as they were. Name the call that raised it.
                 velocitiesNotFinite = true;
+                if (changed == State::Positions)
+                    throw OpenMMException(std::string("setPositions: the Context's velocities (set before these "
+                                                      "positions) cannot be made rigid at them: ") + e.what() +
+                                          "; the integrator will not step until velocities are set again");
                 throw OpenMMException(std::string("setVelocities: ") + e.what() + "; the integrator will not step "
                                       "until finite velocities are set");
             }
-            velocitiesNotFinite = false;
+            if (changed == State::Velocities)
+                velocitiesNotFinite = false;
         }
-        else
+        else {
             velocitiesNeedProjection = true;
+            if (changed == State::Velocities)
+                velocitiesNotFinite = false;  // checked when projected
+        }
     }
 }
 
@@ -248,20 +263,14 @@ void RigidBodyIntegrator::loadCheckpoint(std::istream& stream) {
         kernel.getAs<RigidBodyKernel>().loadCheckpoint(*context, kernelState);
         loadingCheckpoint = true;
     } catch (const OpenMMException& e) {
-        // OpenMM has already overwritten positions, velocities, time, box and parameters.
+        // OpenMM has already read its own part unchecked: positions, velocities, time, box,
+        // parameters and its platform's random state (garbage there crashes a later step).
+        // Only Context::reinitialize() rebuilds all of it, so stepping waits for it (or for
+        // a checkpoint that fits); meanwhile the platform's unchecked state is made valid.
         refusedCheckpoint = true;
-        positionsSetSinceRefusal = velocitiesSetSinceRefusal = false;
         forcesAreValid = false;
-        const std::string platform = context->getPlatform().getName();
-        const std::string reinitialize =
-            (platform == "Reference" || platform == "CPU"
-                 ? ""
-                 : " (on the " + platform + " platform, which keeps charges and masses in the arrays a checkpoint "
-                   "overwrites, call Context::reinitialize() first)");
-        throw OpenMMException(std::string("loadCheckpoint: ") + e.what() +
-                              ". The Context now holds part of that checkpoint's data (OpenMM reads it before the "
-                              "integrator's part): set positions and velocities again" + reinitialize +
-                              ", or load a checkpoint that fits, before stepping");
+        kernel.getAs<RigidBodyKernel>().discardRefusedCheckpoint(*context);
+        throw OpenMMException(std::string("loadCheckpoint: ") + e.what() + ". " + RefusedCheckpointRecovery);
     }
     refusedCheckpoint = false;
 }
@@ -287,15 +296,18 @@ void RigidBodyIntegrator::step(int steps) {
     if (getStepSize() == 0 || !std::isfinite(getStepSize()))
         throw OpenMMException("The step size must be a finite nonzero number of picoseconds, got " +
                               std::to_string(getStepSize()));
+    if (!std::isfinite(1.0 / getStepSize()))
+        throw OpenMMException("The step size " + std::to_string(getStepSize()) + " ps is too small: its inverse is "
+                              "not finite");
     if (refusedCheckpoint)
-        throw OpenMMException("step: the last loadCheckpoint() was refused and left part of that checkpoint's data in "
-                              "the Context; set positions and velocities again, or load a checkpoint that fits, before "
-                              "stepping");
+        throw OpenMMException(std::string("step: the last loadCheckpoint() was refused. ") + RefusedCheckpointRecovery);
     if (!positionsSet)
         throw OpenMMException("step: the Context's positions have not been set");
-    if (positionsNotFinite || velocitiesNotFinite)
-        throw OpenMMException(std::string("step: the Context's ") + (positionsNotFinite ? "positions" : "velocities") +
-                              " are not finite; set finite ones before stepping");
+    if (positionsNotFinite)
+        throw OpenMMException("step: the Context's positions are not finite; set finite ones before stepping");
+    if (velocitiesNotFinite)
+        throw OpenMMException("step: the Context's velocities are not finite, or could not be made rigid at its "
+                              "positions; set velocities again before stepping");
     RigidBodyKernel& stepKernel = kernel.getAs<RigidBodyKernel>();
     for (int i = 0; i < steps; i++) {
         // Another integrator (of a CompoundIntegrator) stepped since this one did, or

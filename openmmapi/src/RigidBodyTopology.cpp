@@ -5,6 +5,7 @@
 #include "openmm/MonteCarloMembraneBarostat.h"
 #include "openmm/OpenMMException.h"
 #include <algorithm>
+#include <cmath>
 #include <set>
 #include <sstream>
 
@@ -40,8 +41,13 @@ RigidBodyTopology::RigidBodyTopology(const System& system, const vector<vector<i
                            const vector<vector<int> >& molecules) {
     const int numParticles = system.getNumParticles();
     masses.resize(numParticles);
-    for (int i = 0; i < numParticles; i++)
+    for (int i = 0; i < numParticles; i++) {
         masses[i] = system.getParticleMass(i);
+        // A negative mass makes kinetic energy and temperature negative and the dynamics unbounded.
+        if (!(masses[i] >= 0) || !std::isfinite(masses[i]))
+            fail("Particle " + std::to_string(i) + " has mass " + std::to_string(masses[i]) +
+                 ": a rigid-body integrator needs every mass finite and >= 0 (0 for a massless particle)");
+    }
     auto isMassive = [&](int i) { return masses[i] != 0.0 && !system.isVirtualSite(i); };
 
     vector<vector<int> > candidates;

@@ -1,6 +1,4 @@
 """openmm.XmlSerializer, copy and pickle give back the plugin's integrator classes."""
-import xml.etree.ElementTree as ElementTree
-
 import openmm
 
 from . import integrators
@@ -25,13 +23,14 @@ def asPluginIntegrator(integrator):
 
 
 def _checkWellFormed(document):
-    """OpenMM 7.7's XML reader (irrXML) reads past the end of a truncated document and can
-    crash the process: refuse anything that is not well-formed XML before it gets there."""
+    """OpenMM 7.7's XML reader (irrXML) reads past the end of a truncated document and
+    overflows its stack on deeply nested ones, crashing the process: refuse anything the
+    plugin's check (C++ checkWellFormedXml) does not pass before it gets there."""
     try:
-        ElementTree.fromstring(document)
-    except ElementTree.ParseError as error:
-        raise openmm.OpenMMException('XmlSerializer.deserialize: not a well-formed XML document (%s); '
-                         'the file may be truncated or corrupted' % error) from None
+        integrators._checkWellFormedXml(document)
+    except openmm.OpenMMException as error:
+        raise openmm.OpenMMException('XmlSerializer.deserialize: %s; the file may be truncated or corrupted'
+                                     % error) from None
 
 
 def _returningPluginIntegrators(function, checkDocument=False):

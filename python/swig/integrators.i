@@ -50,6 +50,35 @@ static void raiseOpenMMException(const char* message) {
     }
 }
 
+/*
+ * Numbers as OpenMM's own wrappers take them: a double from anything with __float__, an
+ * int from anything with __index__ (numpy scalars among them; SWIG's defaults take only
+ * Python's float and int).
+ */
+%typemap(in) double {
+    $1 = PyFloat_AsDouble($input);
+    if ($1 == -1.0 && PyErr_Occurred())
+        SWIG_fail;
+}
+%typemap(typecheck, precedence=SWIG_TYPECHECK_DOUBLE) double {
+    $1 = (PyFloat_Check($input) || PyIndex_Check($input) || PyObject_HasAttrString($input, "__float__")) ? 1 : 0;
+}
+%typemap(in) int {
+    PyObject* index = PyNumber_Index($input);
+    if (index == NULL)
+        SWIG_fail;
+    long value = PyLong_AsLong(index);
+    Py_DECREF(index);
+    if (value == -1 && PyErr_Occurred())
+        SWIG_fail;
+    if (value < INT_MIN || value > INT_MAX)
+        SWIG_exception_fail(SWIG_OverflowError, "in method '$symname', argument $argnum out of range of int");
+    $1 = (int) value;
+}
+%typemap(typecheck, precedence=SWIG_TYPECHECK_INTEGER) int {
+    $1 = PyIndex_Check($input) ? 1 : 0;
+}
+
 /* Particle lists: any iterable of integers in, Python lists out. */
 %typemap(in) const std::vector<int>& (std::vector<int> values) {
     PyObject* iterator = PyObject_GetIter($input);
@@ -185,6 +214,16 @@ MRATTLE_INTEGRATOR(RigidSplittingIntegrator, "RigidSplittingIntegrator.h")
     val = val/unit.picosecond
 %}
 %include "MRattleLangevinIntegrator.h"
+
+/* The plugin's XML check (the rule lives in C++): the package runs it before OpenMM's reader. */
+%{
+#include "MRattleXml.h"
+%}
+%inline %{
+void _checkWellFormedXml(const char* document) {
+    MRattlePlugin::checkWellFormedXml(document);
+}
+%}
 
 /*
  * OpenMM's XmlSerializer returns deserialized integrators as plain openmm.Integrator

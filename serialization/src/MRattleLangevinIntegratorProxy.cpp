@@ -26,10 +26,11 @@ void* MRattleLangevinIntegratorProxy::deserialize(const SerializationNode& node)
     RigidBodyIntegratorSerialization::checkVersion(node, TypeName, Version);
     const double temperature = RigidBodyIntegratorSerialization::getDouble(node, "temperature", TypeName);
     const double friction = RigidBodyIntegratorSerialization::getDouble(node, "friction", TypeName);
+    // Outside the try: its message already names the type.
+    const double stepSize = RigidBodyIntegratorSerialization::getStepSize(node, TypeName);
     std::unique_ptr<MRattleLangevinIntegrator> integrator;
     try {
-        integrator.reset(new MRattleLangevinIntegrator(temperature, friction,
-                                                       RigidBodyIntegratorSerialization::getStepSize(node, TypeName)));
+        integrator.reset(new MRattleLangevinIntegrator(temperature, friction, stepSize));
     } catch (const OpenMMException& e) {
         throw OpenMMException(std::string(TypeName) + " XML: " + e.what());
     }

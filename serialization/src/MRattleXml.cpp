@@ -110,6 +110,8 @@ void MRattlePlugin::checkWellFormedXml(const string& xml) {
             if (open.empty() && sawRoot)
                 problem("a second root element <" + name + ">", start);
             sawRoot = true;
+            if ((int) open.size() >= MaxXmlDepth)
+                problem("elements nest deeper than " + std::to_string(MaxXmlDepth) + " levels", start);
             if (!selfClosing)
                 open.push_back(name);
         }

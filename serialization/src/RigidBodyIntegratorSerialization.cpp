@@ -128,6 +128,8 @@ void RigidBodyIntegratorSerialization::deserialize(const SerializationNode& node
             if (particle.getName() != "Particle")
                 fail(typeName, "unexpected element <" + particle.getName() + "> in <Body>");
             particles.push_back(parseInteger(particle, "index", typeName));
+            if (!particle.getChildren().empty())
+                fail(typeName, "unexpected element <" + particle.getChildren()[0].getName() + "> in <Particle>");
         }
         try {
             integrator.addRigidBody(particles);

@@ -7,15 +7,29 @@
  *   xml          an accepted document must give an integrator with valid settings;
  *   checkpoints  any damage to the integrator's part must be refused;
  *   api          after any call sequence, a step that succeeds leaves finite positions
- *                and velocities.
+ *                and velocities;
+ *   endforces    (issue 22) a body and free particles run into a wall where the forces
+ *                stop being finite, with each integrator: a step that returns leaves a
+ *                finite state, a refused one leaves the state exactly as it was;
+ *   constraints  (issue 22) constrained free pairs with velocities up to 1000 nm/ps: a
+ *                step that returns keeps every constraint, a refused one changes nothing;
+ *   shapes       (issue 22) near-linear, tiny and near-coincident bodies at 300 K and
+ *                2 fs: the degrees of freedom follow the documented shape rule (checked
+ *                with the fuzzer's own moments), and linear and point bodies must step;
+ *   xmldepth     (issue 22) integrator documents nested up to 200,000 deep or with
+ *                elements inside <Particle>: refused if deeper than MaxXmlDepth or with
+ *                a stray element, never a crash.
  * Reports per category: cases, accepted, refused, crashes, silent acceptances of wrong
  * input, wrong refusals of valid input. Exit status 1 if any crash, silent acceptance or
  * wrong refusal. Usage: FuzzMRattle [--cases N] [--seed S] [--only bodies,xml,...]
  * [--first K] [--verbose 1] (replay cases from K, printing each API call) [--selftest 1] (the first case of each category then crashes on purpose: the harness
  * must count it and fail).
  */
+#include "MRattleLangevinIntegrator.h"
 #include "MRattleXml.h"
 #include "RigidSplittingIntegrator.h"
+#include "mrattle/RigidBodyMath.h"
+#include <Eigen/Eigenvalues>
 #include "TestSupport.h"
 #include "openmm/serialization/XmlSerializer.h"
 #include <csignal>
@@ -138,12 +152,25 @@ int bodiesCase(std::mt19937& random) {
             if (bodyOf(p1) != bodyOf(p2))
                 valid = false;
         }
+    if (verbose)
+        for (auto& body : bodies) {
+            std::fprintf(stderr, "  body:");
+            for (int i : body)
+                std::fprintf(stderr, " %d", i);
+            std::fprintf(stderr, "\n");
+        }
     int outcome = guarded([&] {
         MRattleIntegrator integrator(0.001);
         for (auto& body : bodies)
             integrator.addRigidBody(body);
         Context context(f.system, integrator, platform("Reference"));
         context.setPositions(f.positions);
+        // Bodies take their shape when positions are set (near-linear ones are put on their
+        // axis, docs/ALGORITHM.md): rigid from there, and moved by little getting there.
+        const vector<Vec3> set = context.getState(State::Positions).getPositions();
+        for (int i = 0; i < f.system.getNumParticles(); i++)   // virtual sites are placed anew
+            if (!f.system.isVirtualSite(i) && maxDeviation({f.positions[i]}, {set[i]}) > 0.01 * 2.5)
+                return (int) SilentAcceptance;   // more than 1% of the largest possible body (2.5 nm)
         context.setVelocitiesToTemperature(300, 1);
         integrator.step(5);
         State s = context.getState(State::Positions | State::Velocities);
@@ -152,7 +179,11 @@ int bodiesCase(std::mt19937& random) {
         vector<vector<int> > rigid;
         for (auto& body : integrator.getBodiesInEffect())
             rigid.push_back(body);
-        if (maxDistanceChange(f.positions, s.getPositions(), rigid) > 1e-9)
+        const double change = maxDistanceChange(set, s.getPositions(), rigid);
+        if (verbose)
+            std::fprintf(stderr, "  oracle: valid %d; largest change of an intra-body distance %g nm\n", (int) valid,
+                         change);
+        if (change > 1e-9)
             return (int) SilentAcceptance;
         return (int) Accepted;
     });
@@ -227,32 +258,49 @@ int checkpointCase(std::mt19937& random) {
     context.createCheckpoint(stream);
     string checkpoint = stream.str();
     const size_t start = checkpoint.rfind("MRattleC");
-    std::uniform_int_distribution<size_t> where(start, checkpoint.size() - 1);
-    std::uniform_int_distribution<int> kind(0, 3), flips(1, 4), bit(0, 7);
-    switch (kind(random)) {
+    std::uniform_int_distribution<size_t> where(start, checkpoint.size() - 1), anywhere(0, checkpoint.size() - 1);
+    std::uniform_int_distribution<int> kind(0, 4), flips(1, 4), bit(0, 7);
+    const State saved = context.getState(State::Positions | State::Velocities | State::Parameters);
+    const int damage = kind(random);
+    switch (damage) {
     case 0:
     case 1:
         for (int k = flips(random); k > 0; k--)
             checkpoint[where(random)] ^= (char) (1 << bit(random));
         break;
     case 2: checkpoint.resize(where(random)); break;
-    default: checkpoint.insert(where(random), "junk"); break;
+    case 3: checkpoint.insert(where(random), "junk"); break;
+    default: checkpoint.insert(anywhere(random), "junk"); break;   // OpenMM's part too (issue 22)
     }
+    bool ours = false;   // refused by the integrator (OpenMM's own checks refuse before overwriting anything)
     int outcome = guarded([&] {
         std::istringstream in(checkpoint);
-        context.loadCheckpoint(in);
+        try {
+            context.loadCheckpoint(in);
+        } catch (const OpenMMException& e) {
+            ours = string(e.what()).find("OpenMM had already loaded") != string::npos;
+            throw;
+        }
         return (int) Accepted;
     });
     if (outcome == Accepted && checkpoint != stream.str())
         return SilentAcceptance;
-    if (outcome == Refused) {
-        // Stepping must wait for new positions and velocities.
+    if (outcome == Refused && ours) {
+        // Stepping must wait for Context::reinitialize(), setState() or not, and then work.
+        context.setState(saved);
         int next = guarded([&] {
             integrator.step(1);
             return (int) Accepted;
         });
         if (next != Refused)
             return SilentAcceptance;
+        context.reinitialize();
+        context.setState(saved);
+        if (guarded([&] {
+                integrator.step(5);
+                return (int) Accepted;
+            }) != Accepted)
+            return WrongRefusal;
     }
     return outcome;
 }
@@ -336,6 +384,222 @@ int apiCase(std::mt19937& random) {
     return refusals > 0 ? Refused : Accepted;
 }
 
+// ---- issue 22: end-of-step forces, free constraints, shapes, XML depth ----------------------
+
+std::unique_ptr<RigidBodyIntegrator> anyIntegrator(std::mt19937& random, double stepSize) {
+    switch (std::uniform_int_distribution<int>(0, 2)(random)) {
+    case 0: return std::unique_ptr<RigidBodyIntegrator>(new MRattleIntegrator(stepSize));
+    case 1: return std::unique_ptr<RigidBodyIntegrator>(new RigidSplittingIntegrator(stepSize));
+    default: return std::unique_ptr<RigidBodyIntegrator>(new MRattleLangevinIntegrator(300, 1, stepSize));
+    }
+}
+
+/**
+ * Step one at a time: SilentAcceptance if a step returns with a state that fails the
+ * check, or a refused step changed positions, velocities or the step count.
+ */
+int stepChecked(Context& context, Integrator& integrator, int steps, const std::function<bool(const State&)>& good) {
+    int outcome = Accepted;
+    for (int k = 0; k < steps; k++) {
+        State before = context.getState(State::Positions | State::Velocities);
+        try {
+            integrator.step(1);
+        } catch (const OpenMMException& e) {
+            State after = context.getState(State::Positions | State::Velocities);
+            for (size_t i = 0; i < before.getPositions().size(); i++)
+                if (!(before.getPositions()[i] == after.getPositions()[i]) ||
+                    !(before.getVelocities()[i] == after.getVelocities()[i]))
+                    return SilentAcceptance;
+            if (before.getStepCount() != after.getStepCount() || std::strlen(e.what()) == 0)
+                return SilentAcceptance;
+            outcome = Refused;
+            continue;  // stepping again must be refused or succeed properly too
+        }
+        State after = context.getState(State::Positions | State::Velocities);
+        if (!allFinite(after.getPositions()) || !allFinite(after.getVelocities()) || !good(after))
+            return SilentAcceptance;
+    }
+    return outcome;
+}
+
+int endForcesCase(std::mt19937& random) {
+    std::uniform_real_distribution<double> unit(0, 1);
+    System system;
+    // A 3-atom body (bonded: a molecule) and two free atoms; a wall sqrt(c - x) or log(c - x).
+    for (double m : {16.0, 1.0, 1.0, 12.0, 40.0})
+        system.addParticle(m);
+    const double wallAt = 1.0 + 0.3 * unit(random);
+    CustomExternalForce* wall = new CustomExternalForce(unit(random) < 0.5 ? "sqrt(c-x)" : "-log(c-x)");
+    wall->addGlobalParameter("c", wallAt);
+    for (int i = 0; i < 5; i++)
+        if (unit(random) < 0.8)
+            wall->addParticle(i, {});
+    system.addForce(wall);
+    HarmonicBondForce* bonds = new HarmonicBondForce();
+    bonds->addBond(0, 1, 0.1, 1);
+    bonds->addBond(0, 2, 0.1, 1);
+    system.addForce(bonds);
+    std::unique_ptr<RigidBodyIntegrator> integrator = anyIntegrator(random, 0.001 + 0.02 * unit(random));
+    Context context(system, *integrator, platform(unit(random) < 0.5 ? "Reference" : "CPU"));
+    vector<Vec3> x = {Vec3(0.9, 0, 0), Vec3(0.95, 0.08, 0), Vec3(0.85, 0, 0.1), Vec3(0.9, 1, 0), Vec3(0.9, 0, 1)};
+    context.setPositions(x);
+    const double speed = 20 * unit(random);
+    vector<Vec3> v;
+    for (int i = 0; i < 5; i++)
+        v.push_back(Vec3(speed * (0.5 + unit(random)), speed * (unit(random) - 0.5), 0));
+    context.setVelocities(v);
+    return stepChecked(context, *integrator, 60, [](const State&) { return true; });
+}
+
+int constraintsCase(std::mt19937& random) {
+    std::uniform_real_distribution<double> unit(0, 1);
+    System system;
+    for (double m : {12.0, 12.0, 1.0, 16.0, 16.0, 1.0, 1.0})
+        system.addParticle(m);
+    system.addConstraint(0, 1, 0.1);
+    system.addConstraint(1, 2, 0.11);  // a chain 0-1-2 (CCMA) and a pair 3-4
+    system.addConstraint(3, 4, 0.12);
+    std::unique_ptr<RigidBodyIntegrator> free = anyIntegrator(random, 0.0005 + 0.01 * unit(random));
+    free->addRigidBody({5, 6});  // the rest is free
+    Context context(system, *free, platform(unit(random) < 0.5 ? "Reference" : "CPU"));
+    vector<Vec3> x = {Vec3(0, 0, 0), Vec3(0.1, 0, 0), Vec3(0.1, 0.11, 0), Vec3(1, 0, 0), Vec3(1.12, 0, 0),
+                      Vec3(2, 0, 0), Vec3(2.1, 0, 0)};
+    context.setPositions(x);
+    const double speed = std::pow(10.0, 3 * unit(random));   // 1 to 1000 nm/ps
+    vector<Vec3> v;
+    for (int i = 0; i < 7; i++)
+        v.push_back(Vec3(unit(random) - 0.5, unit(random) - 0.5, unit(random) - 0.5) * (2 * speed));
+    context.setVelocities(v);
+    const double tolerance = free->getConstraintTolerance();
+    return stepChecked(context, *free, 5, [&](const State& state) {
+        const vector<Vec3>& p = state.getPositions();
+        for (int c = 0; c < system.getNumConstraints(); c++) {
+            int a, b;
+            double d;
+            system.getConstraintParameters(c, a, b, d);
+            const double length = std::sqrt((p[a] - p[b]).dot(p[a] - p[b]));
+            if (!(std::fabs(length - d) <= 2 * tolerance * d))
+                return false;
+        }
+        return true;
+    });
+}
+
+int shapesCase(std::mt19937& random) {
+    std::uniform_real_distribution<double> unit(0, 1);
+    const int regime = std::uniform_int_distribution<int>(0, 3)(random);
+    // 0: a 3-5 atom rod of normal size with one atom off its line (below the linear
+    // threshold or clearly above it); 1: a tiny body; 2: a water with an atom 1e-6 nm from
+    // its oxygen; 3: a rod bent anywhere between (may be refused: judged only for the rule).
+    const int numAtoms = regime == 2 ? 4 : std::uniform_int_distribution<int>(3, 5)(random);
+    vector<double> masses;
+    vector<Vec3> sites;
+    const double scale = regime == 1 ? std::pow(10.0, -9 + 5.5 * unit(random)) : 0.1 + 0.1 * unit(random);
+    if (regime == 2) {
+        masses = {16, 1, 1, 2};
+        sites = {Vec3(0, 0, 0), Vec3(0.09572, 0, 0), Vec3(-0.024, 0.0927, 0), Vec3(1e-6, 0, 0)};
+    }
+    else {
+        for (int k = 0; k < numAtoms; k++) {
+            masses.push_back(1 + 30 * unit(random));
+            sites.push_back(regime == 1 ? Vec3(unit(random), unit(random), unit(random)) * scale
+                                        : Vec3(scale * (k - 0.5 * (numAtoms - 1)), 0, 0));
+        }
+        if (regime != 1) {
+            const double offset = regime == 0 ? (unit(random) < 0.5 ? std::pow(10.0, -9 + 6 * unit(random))
+                                                                     : scale * (0.1 + 0.2 * unit(random)))
+                                              : scale * std::pow(10.0, -6 + 5.5 * unit(random));
+            sites[std::uniform_int_distribution<int>(0, numAtoms - 1)(random)][1] += offset;
+        }
+    }
+    // The fuzzer's own moments: the rule as docs/ALGORITHM.md states it.
+    double total = 0;
+    Eigen::Vector3d center = Eigen::Vector3d::Zero();
+    for (size_t k = 0; k < sites.size(); k++) {
+        total += masses[k];
+        center += masses[k] * Eigen::Vector3d(sites[k][0], sites[k][1], sites[k][2]);
+    }
+    center /= total;
+    Eigen::Matrix3d inertia = Eigen::Matrix3d::Zero();
+    double rms2 = 0;
+    for (size_t k = 0; k < sites.size(); k++) {
+        Eigen::Vector3d a = Eigen::Vector3d(sites[k][0], sites[k][1], sites[k][2]) - center;
+        inertia += masses[k] * (a.squaredNorm() * Eigen::Matrix3d::Identity() - a * a.transpose());
+        rms2 += masses[k] * a.squaredNorm() / total;
+    }
+    const Eigen::Vector3d moments = Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d>(inertia).eigenvalues();
+    const double ratio = moments(0) / moments(2);
+    const bool point = std::sqrt(rms2) <= RigidBodyMath::PointRadius;
+    if (!point && std::fabs(std::log(ratio / RigidBodyMath::LinearMomentRatio)) < std::log(2.0))
+        return Accepted;  // within a factor 2 of the threshold: round-off may decide either way
+    const int expectedDof = point ? 3 : ratio <= RigidBodyMath::LinearMomentRatio ? 5 : 6;
+    System system;
+    vector<Vec3> positions;
+    const Vec3 where(unit(random) * 3, unit(random) * 3, unit(random) * 3);
+    vector<Vec3> rotation = randomRotation(random());
+    vector<int> body;
+    for (size_t k = 0; k < sites.size(); k++) {
+        body.push_back(system.addParticle(masses[k]));
+        positions.push_back(where + rotate(rotation, sites[k]));
+    }
+    std::unique_ptr<RigidBodyIntegrator> integrator = anyIntegrator(random, 0.002);
+    integrator->addRigidBody(body);
+    Context context(system, *integrator, platform(unit(random) < 0.5 ? "Reference" : "CPU"));
+    context.setPositions(positions);
+    if (integrator->getNumDegreesOfFreedom() != expectedDof) {
+        if (verbose)
+            std::fprintf(stderr, "  dof %d, expected %d (ratio %g, rms %g)\n", integrator->getNumDegreesOfFreedom(),
+                         expectedDof, ratio, std::sqrt(rms2));
+        return SilentAcceptance;
+    }
+    const vector<Vec3> start = context.getState(State::Positions).getPositions();
+    context.setVelocitiesToTemperature(300, 1 + random() % 1000);
+    const int outcome = stepChecked(context, *integrator, 40, [&](const State& state) {
+        return maxDistanceChange(start, state.getPositions(), {body}) <= 1e-9 * (1 + scale);
+    });
+    if (outcome == Refused && (regime != 3 && expectedDof < 6))
+        return WrongRefusal;  // linear and point bodies must step at 300 K and 2 fs
+    if (outcome == Refused && regime == 2)
+        return WrongRefusal;
+    return outcome;
+}
+
+int xmlDepthCase(std::mt19937& random) {
+    std::uniform_real_distribution<double> unit(0, 1);
+    MRattleIntegrator original(0.002);
+    original.addRigidBody({0, 1, 2});
+    std::stringstream stream;
+    XmlSerializer::serialize<Integrator>(&original, "Integrator", stream);
+    string xml = stream.str();
+    const int depth = (int) std::pow(10.0, 5.3 * unit(random));
+    const char* names[] = {"a", "Particle", "Body", "RigidBodies", "Integrator"};
+    const string name = names[std::uniform_int_distribution<int>(0, 4)(random)];
+    string open, close;
+    for (int k = 0; k < depth; k++) {
+        open += "<" + name + ">";
+        close += "</" + name + ">";   // all the same name: the order is that of nesting
+    }
+    // Inside a <Particle>, inside the root, or around the whole document.
+    const int where = std::uniform_int_distribution<int>(0, 2)(random);
+    // Every such document has an element where none belongs (or a root that is no
+    // integrator): it must be refused, by the depth check or by the proxies.
+    if (where == 0) {
+        const size_t at = xml.find("<Particle index=\"1\"/>");
+        xml.replace(at, string("<Particle index=\"1\"/>").size(), "<Particle index=\"1\">" + open + close + "</Particle>");
+    }
+    else if (where == 1)
+        xml.insert(xml.find("<RigidBodies"), open + close);
+    else {
+        const size_t at = xml.find("<Integrator");
+        xml = xml.substr(0, at) + open + xml.substr(at) + close;
+    }
+    int outcome = guarded([&] {
+        delete deserializeIntegratorXml(xml);
+        return (int) Accepted;
+    });
+    return outcome == Accepted ? (int) SilentAcceptance : outcome;
+}
+
 struct Counts {
     int cases = 0, accepted = 0, refused = 0, crashes = 0, silent = 0, wrongRefusals = 0, emptyMessages = 0, other = 0;
 };
@@ -345,7 +609,7 @@ struct Counts {
 int main(int argc, char** argv) {
     int cases = 50, first = 0;
     unsigned seed = 1;
-    string only = "bodies,xml,checkpoints,api";
+    string only = "bodies,xml,checkpoints,api,endforces,constraints,shapes,xmldepth";
     bool selftest = false;
     for (int i = 1; i + 1 < argc; i += 2) {
         string flag = argv[i];
@@ -364,11 +628,13 @@ int main(int argc, char** argv) {
     }
     loadPlugins();
     const std::map<string, std::function<int(std::mt19937&)> > categories = {
-        {"bodies", bodiesCase}, {"xml", xmlCase}, {"checkpoints", checkpointCase}, {"api", apiCase}};
+        {"bodies", bodiesCase}, {"xml", xmlCase}, {"checkpoints", checkpointCase}, {"api", apiCase},
+        {"endforces", endForcesCase}, {"constraints", constraintsCase}, {"shapes", shapesCase},
+        {"xmldepth", xmlDepthCase}};
     bool clean = true;
     std::printf("%-12s %7s %9s %8s %8s %7s %15s %7s\n", "category", "cases", "accepted", "refused", "crashes", "silent",
                 "wrong refusals", "other");
-    for (const string name : {"bodies", "xml", "checkpoints", "api"}) {
+    for (const string name : {"bodies", "xml", "checkpoints", "api", "endforces", "constraints", "shapes", "xmldepth"}) {
         if (only.find(name) == string::npos)
             continue;
         Counts counts;

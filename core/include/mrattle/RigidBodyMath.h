@@ -54,9 +54,31 @@ Eigen::Vector3d centerOfMass(const BodyView& body, const double* positions);
 Eigen::Matrix3d secondMoment(const BodyView& body, const double* positions, const Eigen::Vector3d& center);
 
 /**
- * True if the second moment J describes collinear atoms: its middle eigenvalue is below
- * 1e-12 of the largest, i.e. the atoms lie within 1e-6 of the body's length from a line.
- * Also true for a body whose atoms all coincide (no extent at all).
+ * A body whose smallest principal moment of inertia is below this fraction of its largest
+ * is linear (as LAMMPS's fix rigid zeroes a moment below 1e-7 of the largest, but larger:
+ * the 3-decimal coordinates of a .gro file leave CO2, N2O or HCN up to 4e-5 off a line, a
+ * PDB file's up to 5e-7). A 3-atom body counts as linear up to a bend of about 2 degrees;
+ * its atoms are then placed on its axis (BodyShapeConstraints), moving them by at most
+ * about 1% of its length.
+ */
+constexpr double LinearMomentRatio = 1e-4;
+
+/**
+ * A body whose atoms lie within this rms distance (nm) of their centre is a point: it
+ * only translates (no real body is that small; a smaller one's rotation would be too fast
+ * for any step). Its atoms keep their offsets.
+ */
+constexpr double PointRadius = 1e-3;
+
+/** True if a body of this mass and second moment trace (sum m |a|^2) is within PointRadius of a point. */
+inline bool isPointExtent(double secondMomentTrace, double totalMass) {
+    return !(secondMomentTrace > totalMass * PointRadius * PointRadius);
+}
+
+/**
+ * True if the second moment J describes a linear body: its smallest principal moment of
+ * inertia, tr(J) - (largest eigenvalue of J), is below LinearMomentRatio of its largest,
+ * tr(J) - (smallest eigenvalue). Also true for a body whose atoms all coincide.
  */
 bool isLinearShape(const Eigen::Matrix3d& secondMoment);
 
@@ -64,10 +86,16 @@ bool isLinearShape(const Eigen::Matrix3d& secondMoment);
 enum class Shape { General, Linear, Point };
 
 /**
- * Classify a body from its second moment J and mass: a point if its atoms all lie within
- * 1e-10 nm (rms) of its centre, else linear if isLinearShape(J), else general.
+ * Classify a body from its second moment J and mass: a point if isPointExtent(tr J), else
+ * linear if isLinearShape(J), else general. Every platform's kernels call it.
  */
 Shape classifyShape(const Eigen::Matrix3d& secondMoment, double totalMass);
+
+/**
+ * The body's axis if it is linear by classifyShape() but its atoms are off a line by more
+ * than 1e-6 of its size: the unit eigenvector of J's largest eigenvalue; zero otherwise.
+ */
+Eigen::Vector3d axisToStraighten(const Eigen::Matrix3d& secondMoment, double totalMass);
 
 /** Degrees of freedom of a body of that shape. */
 inline int degreesOfFreedom(Shape shape) {

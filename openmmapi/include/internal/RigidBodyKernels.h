@@ -91,6 +91,14 @@ public:
     virtual void createCheckpoint(OpenMM::ContextImpl& context, std::ostream& stream) const = 0;
     /** Read what createCheckpoint() wrote; throw an OpenMMException saying what is wrong if it does not fit. */
     virtual void loadCheckpoint(OpenMM::ContextImpl& context, std::istream& stream) = 0;
+    /**
+     * A checkpoint was refused after OpenMM had read its own part of it unchecked: make the
+     * platform state OpenMM read that a later step could crash on (e.g. a random generator's)
+     * valid again. The integrator refuses to step until Context::reinitialize() in any case.
+     * Default: nothing.
+     */
+    virtual void discardRefusedCheckpoint(OpenMM::ContextImpl& context) {
+    }
 };
 
 /** M-RATTLE: the position update resets each body with the 3 + 3 conditions. */

@@ -14,6 +14,9 @@ public:
 
 protected:
     void integratePositions(OpenMM::ContextImpl& context, const MRattleIntegrator& integrator) override;
+    const char* integratorName() const override {
+        return "MRattleIntegrator";
+    }
 };
 
 } // namespace MRattlePlugin

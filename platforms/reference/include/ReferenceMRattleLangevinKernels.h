@@ -23,6 +23,9 @@ public:
 protected:
     void finishStep(OpenMM::ContextImpl& context, const MRattleLangevinIntegrator& integrator) override;
     void integratePositions(OpenMM::ContextImpl& context, const MRattleLangevinIntegrator& integrator) override;
+    const char* integratorName() const override {
+        return "MRattleLangevinIntegrator";
+    }
 
 private:
     std::vector<OpenMM::Vec3> kicked, middlePositions, middleVelocities;  // step buffers

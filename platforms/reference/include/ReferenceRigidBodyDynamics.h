@@ -83,9 +83,16 @@ public:
     void driftAndReset(std::vector<OpenMM::Vec3>& x, const std::vector<OpenMM::Vec3>& v, double h, double tolerance,
                        std::vector<OpenMM::Vec3>& newPositions, std::vector<OpenMM::Vec3>& newVelocities,
                        const std::vector<OpenMM::Vec3>* forces = nullptr, double kickTime = 0);
-    /** RATTLE position step for free-particle constraints: moves newPositions onto the constraints. */
+    /**
+     * RATTLE position step for free-particle constraints: moves newPositions onto the
+     * constraints. Throws an OpenMMException naming a constraint that did not converge
+     * (OpenMM's solver gives up silently); oldPositions are not changed.
+     */
     void constrainFreePositions(std::vector<OpenMM::Vec3>& oldPositions, std::vector<OpenMM::Vec3>& newPositions,
                                 double tolerance);
+    /** RATTLE velocity step for free-particle constraints; throws if it did not converge. */
+    void constrainFreeVelocities(std::vector<OpenMM::Vec3>& positions, std::vector<OpenMM::Vec3>& velocities,
+                                 double tolerance);
     /** Free constraints, then every body's rigid-body projection (RATTLE's velocity step). */
     void projectVelocities(std::vector<OpenMM::Vec3>& positions, std::vector<OpenMM::Vec3>& velocities, double tolerance);
     /** The same, but bodies whose velocities are already rigid keep them bit for bit. */
@@ -98,8 +105,8 @@ public:
     /**
      * The second half of every rigid-body step, with the forces at the new positions: half
      * kick, then the velocity reset (free constraints and rigid-body projection, which for
-     * a rigid body is exactly a half kick of its momentum and angular momentum); advances
-     * the clock.
+     * a rigid body is exactly a half kick of its momentum and angular momentum). The
+     * caller advances the clock once the step is known to be good.
      */
     void kickAndProject(OpenMM::ContextImpl& context, double stepSize, double tolerance);
     /** Rigid-body Maxwell-Boltzmann velocities at exactly this temperature (RigidBodyKernel). */
@@ -135,6 +142,8 @@ private:
     std::vector<RigidBodyMath::Shape> shapes;
     std::vector<int> otherParticles;   // neither body members nor free: massless (virtual sites too)
     std::unique_ptr<OpenMM::ReferenceConstraints> freeConstraints;
+    std::vector<std::pair<int, int> > freeConstraintAtoms;   // the free constraints, to check what they left
+    std::vector<double> freeConstraintDistances;
     bool andersen = false;
     int numThreads = 1;
     std::unique_ptr<OpenMM::ThreadPool> helpers;   // numThreads - 1 workers; the caller is the last

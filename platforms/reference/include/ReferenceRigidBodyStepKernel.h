@@ -7,6 +7,8 @@
 #include "RigidBodyIntegrator.h"
 #include "openmm/OpenMMException.h"
 #include "openmm/internal/ContextImpl.h"
+#include "openmm/AndersenThermostat.h"
+#include "openmm/kernels.h"
 #include <cmath>
 #include <memory>
 #include <string>
@@ -43,10 +45,25 @@ public:
             dynamics->collideBodies(context, tolerance);
         if (!forcesAreValid)
             context.calcForcesAndEnergy(true, false, integrator.getIntegrationForceGroups());
-        integratePositions(context, integrator);  // leaves the Context as it was if it throws
+        try {
+            integratePositions(context, integrator);  // leaves the Context as it was if it throws
+        } catch (const OpenMM::OpenMMException& e) {
+            throw OpenMM::OpenMMException(std::string(integratorName()) + ": " + e.what());
+        }
         forcesAreValid = false;
-        context.calcForcesAndEnergy(true, false, integrator.getIntegrationForceGroups());
-        finishStep(context, integrator);
+        // integratePositions left the state before it in the step buffers: a failure from
+        // here on puts it back, so a step that returns has produced a finite, valid state.
+        try {
+            context.calcForcesAndEnergy(true, false, integrator.getIntegrationForceGroups());
+            finishStep(context, integrator);
+            requireFiniteStepResult(context);
+        } catch (const OpenMM::OpenMMException& e) {
+            ReferenceRigidBodyDynamics::positions(context).swap(newPositions);
+            ReferenceRigidBodyDynamics::velocities(context).swap(newVelocities);
+            throw OpenMM::OpenMMException(std::string(integratorName()) + ": " + e.what() +
+                                          "; the step was not taken (positions and velocities are as before it)");
+        }
+        ReferenceRigidBodyDynamics::advanceClock(context, integrator.getStepSize());
         forcesAreValid = true;
     }
     void updateShapes(OpenMM::ContextImpl& context) override {
@@ -60,11 +77,11 @@ public:
         std::vector<OpenMM::Vec3>& velocities = ReferenceRigidBodyDynamics::velocities(context);
         requireFinite(velocities, "velocity");
         const std::vector<OpenMM::Vec3> given = velocities;  // only when velocities are set, not in the step
-        dynamics->projectNonRigidVelocities(ReferenceRigidBodyDynamics::positions(context), velocities, tolerance);
         try {
+            dynamics->projectNonRigidVelocities(ReferenceRigidBodyDynamics::positions(context), velocities, tolerance);
             requireFinite(velocities, "velocity projected at the current positions (a degenerate constraint?)");
         } catch (...) {
-            velocities = given;
+            velocities = given;  // a refused projection (not finite, or constraints not converged) changes nothing
             throw;
         }
     }
@@ -91,6 +108,19 @@ public:
     }
     void loadCheckpoint(OpenMM::ContextImpl& context, std::istream& stream) override {
         dynamics->readState(stream);
+    }
+    void discardRefusedCheckpoint(OpenMM::ContextImpl& context) override {
+        // OpenMM's Reference and CPU platforms keep one process-wide random generator (the
+        // AndersenThermostat's, among others) whose state a checkpoint overwrites unchecked,
+        // garbage included. Initialising OpenMM's thermostat kernel reseeds it (with the
+        // System's thermostat seed if it has one), so it rebuilds a valid state.
+        OpenMM::AndersenThermostat seeded(0, 0);
+        const OpenMM::System& system = context.getSystem();
+        for (int f = 0; f < system.getNumForces(); f++)
+            if (const auto* thermostat = dynamic_cast<const OpenMM::AndersenThermostat*>(&system.getForce(f)))
+                seeded.setRandomNumberSeed(thermostat->getRandomNumberSeed());
+        OpenMM::Kernel reseed = context.getPlatform().createKernel(OpenMM::ApplyAndersenThermostatKernel::Name(), context);
+        reseed.getAs<OpenMM::ApplyAndersenThermostatKernel>().initialize(system, seeded);
     }
 
 protected:
@@ -120,7 +150,8 @@ protected:
     }
     /**
      * After the forces at the new positions: velocity Verlet's closing half kick and the
-     * projection (a leapfrog integrator only advances the clock); advances time and step count.
+     * projection (a leapfrog integrator has nothing to do). May throw an OpenMMException;
+     * the step is then undone.
      */
     virtual void finishStep(OpenMM::ContextImpl& context, const Integrator& integrator) {
         dynamics->kickAndProject(context, integrator.getStepSize(), integrator.getConstraintTolerance());
@@ -128,9 +159,34 @@ protected:
     /**
      * The first half of the step: half kick, drift, the integrator's position update,
      * free-particle constraints, virtual sites. Throws an OpenMMException, with the Context
-     * unchanged, if the update fails.
+     * unchanged, if the update fails. On success the Context's position and velocity arrays
+     * are the new ones and newPositions, newVelocities hold those from before (swapped),
+     * so that execute() can undo the step.
      */
     virtual void integratePositions(OpenMM::ContextImpl& context, const Integrator& integrator) = 0;
+    /** The integrator's class name, for messages. */
+    virtual const char* integratorName() const = 0;
+    /**
+     * Throw naming the first massive particle whose new position, velocity or force (at the
+     * new positions: the next step's kick) is not finite.
+     */
+    void requireFiniteStepResult(OpenMM::ContextImpl& context) const {
+        const std::vector<OpenMM::Vec3>& x = ReferenceRigidBodyDynamics::positions(context);
+        const std::vector<OpenMM::Vec3>& v = ReferenceRigidBodyDynamics::velocities(context);
+        const std::vector<OpenMM::Vec3>& f = ReferenceRigidBodyDynamics::forces(context);
+        const std::vector<double>& inverseMass = dynamics->inverseMasses();
+        for (size_t i = 0; i < x.size(); i++) {
+            if (inverseMass[i] == 0)
+                continue;  // massless: never integrated, finite since set
+            const char* what = !std::isfinite(x[i][0] + x[i][1] + x[i][2])   ? "position"
+                               : !std::isfinite(f[i][0] + f[i][1] + f[i][2]) ? "force at the new positions"
+                               : !std::isfinite(v[i][0] + v[i][1] + v[i][2]) ? "velocity"
+                                                                             : nullptr;
+            if (what != nullptr)
+                throw OpenMM::OpenMMException(std::string("the ") + what + " of particle " + std::to_string(i) +
+                                              " is not finite");
+        }
+    }
 
     std::unique_ptr<ReferenceRigidBodyDynamics> dynamics;
     std::unique_ptr<BodyShapeConstraints> shapes;

@@ -14,6 +14,9 @@ public:
 
 protected:
     void integratePositions(OpenMM::ContextImpl& context, const RigidSplittingIntegrator& integrator) override;
+    const char* integratorName() const override {
+        return "RigidSplittingIntegrator";
+    }
 };
 
 } // namespace MRattlePlugin

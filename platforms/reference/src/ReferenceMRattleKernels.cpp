@@ -14,11 +14,7 @@ void ReferenceIntegrateMRattleStepKernel::integratePositions(ContextImpl& contex
     const double h = integrator.getStepSize();
     // Half kick, drift and reset into buffers: the Context is only written once every
     // body's reset has succeeded, so a failed step leaves it as it was.
-    try {
-        dynamics->driftAndReset(x, v, h, integrator.getConstraintTolerance(), newPositions, newVelocities, &f, 0.5 * h);
-    } catch (const OpenMMException& e) {
-        throw OpenMMException(std::string("MRattleIntegrator: ") + e.what());
-    }
+    dynamics->driftAndReset(x, v, h, integrator.getConstraintTolerance(), newPositions, newVelocities, &f, 0.5 * h);
     x.swap(newPositions);
     v.swap(newVelocities);
     placeVirtualSites(context);

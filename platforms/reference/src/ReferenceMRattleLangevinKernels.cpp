@@ -17,7 +17,6 @@ void ReferenceIntegrateMRattleLangevinStepKernel::initialize(const System& syste
 
 void ReferenceIntegrateMRattleLangevinStepKernel::finishStep(ContextImpl& context, const MRattleLangevinIntegrator& integrator) {
     // Leapfrog: the next step's kick uses these forces; the velocities stay mid-step.
-    ReferenceRigidBodyDynamics::advanceClock(context, integrator.getStepSize());
 }
 
 void ReferenceIntegrateMRattleLangevinStepKernel::integratePositions(ContextImpl& context,
@@ -35,7 +34,7 @@ void ReferenceIntegrateMRattleLangevinStepKernel::integratePositions(ContextImpl
             kicked[i] = (inverseMass[i] != 0 ? v[i] + f[i] * (h * inverseMass[i]) : v[i]);
     });
     dynamics->projectVelocities(x, kicked, tolerance);
-    try {
+    {
         if (integrator.getFriction() == 0) {
             // No noise: the two half drifts are one, and the positions are M-RATTLE's.
             dynamics->driftAndReset(x, kicked, h, tolerance, newPositions, newVelocities);
@@ -62,8 +61,6 @@ void ReferenceIntegrateMRattleLangevinStepKernel::integratePositions(ContextImpl
         // The velocities kept are rigid at the new positions (the next kick's projection is
         // linear, so this changes no trajectory; it makes what the Context reports rigid).
         dynamics->projectVelocities(newPositions, newVelocities, tolerance);
-    } catch (const OpenMMException& e) {
-        throw OpenMMException(std::string("MRattleLangevinIntegrator: ") + e.what());
     }
     x.swap(newPositions);
     v.swap(newVelocities);

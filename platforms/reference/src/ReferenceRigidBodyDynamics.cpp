@@ -20,6 +20,12 @@ ReferencePlatform::PlatformData& platformData(ContextImpl& context) {
     return *reinterpret_cast<ReferencePlatform::PlatformData*>(context.getPlatformData());
 }
 
+/**
+ * A free constraint is refused when its error exceeds this many times the tolerance (CCMA
+ * stops within 1x when it converges; the slack is for round-off, SETTLE's included).
+ */
+const double ConstraintCheckSlack = 2;
+
 } // namespace
 
 ReferenceRigidBodyDynamics::ReferenceRigidBodyDynamics(const System& system, const RigidBodyTopology& topology)
@@ -52,6 +58,8 @@ ReferenceRigidBodyDynamics::ReferenceRigidBodyDynamics(const System& system, con
             double distance;
             system.getConstraintParameters(c, p1, p2, distance);
             freeSystem.addConstraint(p1, p2, distance);
+            freeConstraintAtoms.push_back({p1, p2});
+            freeConstraintDistances.push_back(distance);
         }
         freeConstraints.reset(new ReferenceConstraints(freeSystem));
     }
@@ -225,13 +233,40 @@ void ReferenceRigidBodyDynamics::driftAndReset(vector<Vec3>& x, const vector<Vec
 
 void ReferenceRigidBodyDynamics::constrainFreePositions(vector<Vec3>& oldPositions, vector<Vec3>& newPositions,
                                                         double tolerance) {
-    if (freeConstraints)
-        freeConstraints->apply(oldPositions, newPositions, inverseMass, tolerance);
+    if (!freeConstraints)
+        return;
+    freeConstraints->apply(oldPositions, newPositions, inverseMass, tolerance);
+    // OpenMM's CCMA stops after its iteration limit without saying so: check what it left.
+    for (size_t c = 0; c < freeConstraintDistances.size(); c++) {
+        const Vec3 d = newPositions[freeConstraintAtoms[c].first] - newPositions[freeConstraintAtoms[c].second];
+        const double length = std::sqrt(d.dot(d)), target = freeConstraintDistances[c];
+        if (!(std::fabs(length - target) <= ConstraintCheckSlack * tolerance * target))
+            throw OpenMMException("the constraint between free particles " + std::to_string(freeConstraintAtoms[c].first) +
+                                  " and " + std::to_string(freeConstraintAtoms[c].second) + " did not converge (" +
+                                  std::to_string(length) + " nm instead of " + std::to_string(target) +
+                                  " nm); the step size is too large for the velocities or forces");
+    }
+}
+
+void ReferenceRigidBodyDynamics::constrainFreeVelocities(vector<Vec3>& positions, vector<Vec3>& velocities,
+                                                         double tolerance) {
+    if (!freeConstraints)
+        return;
+    freeConstraints->applyToVelocities(positions, velocities, inverseMass, tolerance);
+    // The same criterion as CCMA's velocity step (2 mu |dv . r| / r^2 within the tolerance).
+    for (size_t c = 0; c < freeConstraintDistances.size(); c++) {
+        const int a = freeConstraintAtoms[c].first, b = freeConstraintAtoms[c].second;
+        const Vec3 r = positions[a] - positions[b];
+        const double reducedMass = 1.0 / (inverseMass[a] + inverseMass[b]);
+        const double error = std::fabs(reducedMass * (velocities[a] - velocities[b]).dot(r) / r.dot(r));
+        if (!(error <= ConstraintCheckSlack * tolerance))
+            throw OpenMMException("the velocity constraint between free particles " + std::to_string(a) + " and " +
+                                  std::to_string(b) + " did not converge");
+    }
 }
 
 void ReferenceRigidBodyDynamics::projectVelocities(vector<Vec3>& positions, vector<Vec3>& velocities, double tolerance) {
-    if (freeConstraints)
-        freeConstraints->applyToVelocities(positions, velocities, inverseMass, tolerance);
+    constrainFreeVelocities(positions, velocities, tolerance);
     kickAndProjectBodies(coordinates(positions), coordinates(velocities), RigidBodyMath::Kick(), nullptr);
 }
 
@@ -249,8 +284,7 @@ void ReferenceRigidBodyDynamics::kickAndProjectBodies(const double* positions, d
 
 void ReferenceRigidBodyDynamics::projectNonRigidVelocities(vector<Vec3>& positions, vector<Vec3>& velocities,
                                                            double tolerance) {
-    if (freeConstraints)
-        freeConstraints->applyToVelocities(positions, velocities, inverseMass, tolerance);
+    constrainFreeVelocities(positions, velocities, tolerance);
     const double* x = coordinates(positions);
     double* v = coordinates(velocities);
     forEachBody([&](int b) {
@@ -274,9 +308,7 @@ void ReferenceRigidBodyDynamics::kickAndProject(ContextImpl& context, double ste
         }
     });
     // RATTLE's velocity step for the free constraints (it touches free particles only).
-    if (freeConstraints)
-        freeConstraints->applyToVelocities(x, v, inverseMass, tolerance);
-    advanceClock(context, stepSize);
+    constrainFreeVelocities(x, v, tolerance);
 }
 
 double ReferenceRigidBodyDynamics::kineticEnergy(const vector<Vec3>& velocities) const {

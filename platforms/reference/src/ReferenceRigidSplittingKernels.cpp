@@ -29,20 +29,24 @@ void ReferenceIntegrateRigidSplittingStepKernel::integratePositions(ContextImpl&
                                             coordinates(newPositions), coordinates(newVelocities));
     });
     if (failed != INT_MAX)
-        throw OpenMMException("RigidSplittingIntegrator: rigid body " + std::to_string(failed) +
+        throw OpenMMException("rigid body " + std::to_string(failed) +
                                   " would turn by more than a quarter turn in one step, or its motion is not finite; "
                                   "the step size is too large for the forces, or they are not finite");
     // Free particles: refuse what is not finite, as for bodies (the Context is not yet changed).
     for (int i : bodies.getFreeParticles())
         if (!std::isfinite(newPositions[i][0] + newPositions[i][1] + newPositions[i][2]))
-            throw OpenMMException("RigidSplittingIntegrator: particle " + std::to_string(i) +
+            throw OpenMMException("particle " + std::to_string(i) +
                                   " would move to a position that is not finite; the forces are not finite");
+    // Free particles' velocities from their displacement (massless ones keep theirs); then
+    // the buffers become the state and keep the old one (the step may still be undone).
     const double inverseStep = 1.0 / h;
     for (int i = 0; i < n; i++) {
-        if (inverseMass[i] != 0) {
-            v[i] = (bodies.getBodyOfParticle(i) < 0 ? (newPositions[i] - x[i]) * inverseStep : newVelocities[i]);
-            x[i] = newPositions[i];
-        }
+        if (inverseMass[i] == 0)
+            newVelocities[i] = v[i];
+        else if (bodies.getBodyOfParticle(i) < 0)
+            newVelocities[i] = (newPositions[i] - x[i]) * inverseStep;
     }
+    x.swap(newPositions);
+    v.swap(newVelocities);
     placeVirtualSites(context);
 }

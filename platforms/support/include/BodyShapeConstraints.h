@@ -17,13 +17,17 @@ namespace MRattlePlugin {
  * Only bodies off that geometry by more than Tolerance are moved (by OpenMM's own
  * constraint code: SETTLE for water, CCMA otherwise): bodies already on it keep their exact
  * rigid shape. A body whose constraints do not converge (singular, e.g. planar) keeps the
- * shape it was given. Used by every platform's kernels on the host.
+ * shape it was given. Bodies that RigidBodyMath::classifyShape() finds linear but whose
+ * atoms are off their axis (a bent CO2 from 3-decimal coordinates) are then placed on it,
+ * keeping their centre of mass, so that every platform integrates the same straight body.
+ * Used by every platform's kernels on the host.
  */
 class BodyShapeConstraints {
 public:
     BodyShapeConstraints(const OpenMM::System& system, const RigidBodyTopology& topology);
     /**
-     * Move the bodies that are off their constraint geometry onto it; true if any moved.
+     * Move the bodies that are off their constraint geometry onto it, then straighten
+     * near-linear bodies; true if any moved.
      *
      * @param storageError  how far (nm) a platform's stored coordinates can be from the ones
      *                      set (0 in double precision; single precision rounds a 3 nm box's
@@ -46,6 +50,10 @@ public:
     static constexpr double StorageErrorFactor = 16 * 1.7320508075688772;
 
 private:
+    /** Place the atoms of each near-linear body on its axis; true if any moved. */
+    bool straighten(std::vector<OpenMM::Vec3>& positions) const;
+    /** The constraint-geometry correction alone. */
+    bool applyConstraints(std::vector<OpenMM::Vec3>& positions, double storageError) const;
     RigidBodyTopology topology;
     std::vector<double> inverseMasses;
     std::unique_ptr<OpenMM::ReferenceConstraints> constraints;

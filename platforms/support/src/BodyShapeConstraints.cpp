@@ -1,4 +1,5 @@
 #include "BodyShapeConstraints.h"
+#include "mrattle/RigidBodyMath.h"
 #include <algorithm>
 #include <cmath>
 
@@ -55,6 +56,34 @@ double BodyShapeConstraints::error(const vector<Vec3>& positions, int body, doub
 }
 
 bool BodyShapeConstraints::apply(vector<Vec3>& positions, double storageError) const {
+    const bool constrained = applyConstraints(positions, storageError);
+    return straighten(positions) || constrained;
+}
+
+bool BodyShapeConstraints::straighten(vector<Vec3>& positions) const {
+    const double* x = reinterpret_cast<const double*>(positions.data());
+    bool changed = false;
+    for (int body = 0; body < topology.getNumBodies(); body++) {
+        const vector<int>& atoms = topology.getBodyParticles(body);
+        if (atoms.size() < 3)
+            continue;  // two atoms are always on a line
+        const RigidBodyMath::BodyView view{atoms.data(), (int) atoms.size(), topology.getMasses().data(),
+                                           topology.getBodyMass(body), false};
+        const Eigen::Vector3d center = RigidBodyMath::centerOfMass(view, x);
+        const Eigen::Vector3d axis =
+            RigidBodyMath::axisToStraighten(RigidBodyMath::secondMoment(view, x, center), view.totalMass);
+        if (axis.squaredNorm() == 0)
+            continue;
+        // The projection onto the axis through the centre keeps the centre of mass.
+        const Vec3 c(center[0], center[1], center[2]), u(axis[0], axis[1], axis[2]);
+        for (int i : atoms)
+            positions[i] = c + u * (positions[i] - c).dot(u);
+        changed = true;
+    }
+    return changed;
+}
+
+bool BodyShapeConstraints::applyConstraints(vector<Vec3>& positions, double storageError) const {
     if (!constraints)
         return false;
     // Only bodies clearly off their geometry (a PDB file's waters are off by ~1e-3) move:
