@@ -15,6 +15,7 @@
  */
 #include "RigidSplittingIntegrator.h"
 #include "TestSupport.h"
+#include "MRattleLangevinIntegrator.h"
 #include "openmm/serialization/XmlSerializer.h"
 #include <gtest/gtest.h>
 #include <algorithm>
@@ -317,7 +318,10 @@ void expectRefusedUntilStateIsSet(TestRun& run, const string& badCheckpoint, con
 
     loadCheckpoint(*run.context, good);
     run.integrator->step(10);
-    expectSameState(afterRefusal, snapshot(*run.context));
+    // A Langevin integrator's noise restarts from its seed at reinitialize() (a State holds
+    // no random stream), so only a deterministic run continues as the good checkpoint's.
+    if (dynamic_cast<MRattleLangevinIntegrator*>(run.integrator.get()) == nullptr)
+        expectSameState(afterRefusal, snapshot(*run.context));
 }
 
 /** Where the integrator's part of a checkpoint starts. */
@@ -425,7 +429,8 @@ namespace {
 template <class Base>
 class CountingCheckpoints : public Base {
 public:
-    explicit CountingCheckpoints(double stepSize) : Base(stepSize) {
+    template <class... Arguments>
+    explicit CountingCheckpoints(Arguments... arguments) : Base(arguments...) {
     }
     mutable int checkpointsWritten = 0;
 
@@ -452,16 +457,24 @@ TEST_P(Checkpoint, SteppingWritesNoCheckpointEvenWithJunkLeftByARefusedOne) {
     const string junkCheckpoint = checkpointOf(otherContext);
 
     std::unique_ptr<RigidBodyIntegrator> counting;
-    if (GetParam().integrator == "MRattle")
-        counting.reset(new CountingCheckpoints<MRattleIntegrator>(0.002));
-    else
-        counting.reset(new CountingCheckpoints<RigidSplittingIntegrator>(0.002));
+    int* checkpointsWritten = nullptr;
+    if (GetParam().integrator == "MRattle") {
+        auto* integrator = new CountingCheckpoints<MRattleIntegrator>(0.002);
+        checkpointsWritten = &integrator->checkpointsWritten;
+        counting.reset(integrator);
+    }
+    else if (GetParam().integrator == "MRattleLangevin") {
+        auto* integrator = new CountingCheckpoints<MRattleLangevinIntegrator>(300.0, 1.0, 0.002);
+        checkpointsWritten = &integrator->checkpointsWritten;
+        counting.reset(integrator);
+    }
+    else {
+        auto* integrator = new CountingCheckpoints<RigidSplittingIntegrator>(0.002);
+        checkpointsWritten = &integrator->checkpointsWritten;
+        counting.reset(integrator);
+    }
     TestRun run(GetParam(), std::move(counting), WithThermostat);
-    auto written = [&] {
-        if (GetParam().integrator == "MRattle")
-            return dynamic_cast<CountingCheckpoints<MRattleIntegrator>&>(*run.integrator).checkpointsWritten;
-        return dynamic_cast<CountingCheckpoints<RigidSplittingIntegrator>&>(*run.integrator).checkpointsWritten;
-    };
+    auto written = [&] { return *checkpointsWritten; };
     run.context->setParameter(AndersenThermostat::Temperature(), 310);
     State saved = run.context->getState(State::Positions | State::Velocities | State::Parameters);
     const string refusal = messageOf([&] { loadCheckpoint(*run.context, junkCheckpoint); });

@@ -50,7 +50,9 @@ public:
     /**
      * Set the seed of the random stream. Two Contexts with the same seed draw the same noise;
      * 0 (the default) picks a new seed each time a Context is created. A checkpoint restores
-     * the stream as it was, whatever the seed.
+     * the stream as it was, whatever the seed. On a device platform (OpenCL, CUDA) OpenMM has
+     * one random generator per Context: a System that also has an AndersenThermostat draws
+     * from the generator seeded with the thermostat's seed.
      */
     void setRandomNumberSeed(int seed) {
         randomNumberSeed = seed;

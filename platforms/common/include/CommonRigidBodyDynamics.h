@@ -51,7 +51,11 @@ public:
     /** Add or set a kernel argument in the precision of the integration arithmetic ('mixed'). */
     void addMixedArg(OpenMM::ComputeKernel& kernel, double value) const;
     void setMixedArg(OpenMM::ComputeKernel& kernel, int index, double value) const;
-    /** The fixed-point force buffer and the failure flag, for an integrator's own kernels. */
+    /** Whether the System has an AndersenThermostat (its seed then seeds OpenMM's device random numbers). */
+    bool hasAndersenThermostat() const {
+        return hasAndersen;
+    }
+    /** The failure flag, for an integrator's own kernels. */
     OpenMM::ComputeArray& failureFlag() {
         return failure;
     }

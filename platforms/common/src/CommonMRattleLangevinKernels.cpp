@@ -12,8 +12,10 @@ void CommonIntegrateMRattleLangevinStepKernel::initializeIntegrator(const System
                                                                     const MRattleLangevinIntegrator& integrator) {
     ComputeContext& cc = dynamics.computeContext();
     // Now, not at the first step: OpenMM's checkpoints hold the device random state only
-    // once the generator exists, so a new Context must have it before loading one.
-    cc.getIntegrationUtilities().initRandomNumberGenerator(integrator.getRandomNumberSeed());
+    // once the generator exists, so a new Context must have it before loading one. OpenMM
+    // has one device generator: with an AndersenThermostat it already has that one's seed.
+    if (!dynamics.hasAndersenThermostat())
+        cc.getIntegrationUtilities().initRandomNumberGenerator(integrator.getRandomNumberSeed());
     program = dynamics.compileWith(CommonMRattleKernelSources::langevin);
     langevinNoise = program->createKernel("langevinNoise");
 }
