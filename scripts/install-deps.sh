@@ -64,7 +64,8 @@ packages=()
 for entry in "${missing[@]}"; do
     chosen=""
     for name in $(echo "${entry%%  (*}" | tr '|' ' '); do
-        if apt-cache policy "$name" 2>/dev/null | grep -q 'Candidate: [^(]'; then chosen="$name"; break; fi
+        policy="$(apt-cache policy "$name" 2>/dev/null)"
+        if [[ "$policy" =~ Candidate:\ [^\(] ]]; then chosen="$name"; break; fi
     done
     [ -n "$chosen" ] || { echo "install-deps.sh: no package ${entry%%  (*} in this system's apt sources" >&2; exit 1; }
     packages+=("$chosen")

@@ -56,7 +56,7 @@ reachable() {  # url
     fi
 }
 
-mounted_under() { awk -v t="$1" '$2 == t || index($2, t "/") == 1' /proc/mounts | grep -q .; }
+mounted_under() { awk -v t="$1" '$2 == t || index($2, t "/") == 1 { found = 1 } END { exit !found }' /proc/mounts; }
 
 unmount_all() {
     local m
