@@ -71,8 +71,10 @@ for entry in "${missing[@]}"; do
     packages+=("$chosen")
 done
 mapfile -t packages < <(printf '%s\n' "${packages[@]}" | sort -u)
-echo "install-deps.sh: installing ${packages[*]}"
-DEBIAN_FRONTEND=noninteractive $SUDO apt-get install -y -qq --no-install-recommends "${packages[@]}"
+log="$(mktemp -t mrattle-apt.XXXXXX.log)"
+echo "install-deps.sh: installing ${packages[*]} (apt's output: $log)"
+DEBIAN_FRONTEND=noninteractive $SUDO apt-get install -y -q --no-install-recommends "${packages[@]}" > "$log" 2>&1 || {
+    tail -n 40 "$log" >&2; echo "install-deps.sh: apt-get install failed (log: $log)" >&2; exit 1; }
 check
 if [ ${#missing[@]} -gt 0 ]; then
     echo "install-deps.sh: still missing after installing (is $python the interpreter you meant?):" >&2
