@@ -97,6 +97,7 @@ else
 fi
 phase_done bootstrap "$t"
 
+unmount_all  # what a killed run left
 mount -t proc proc "$target/proc"
 mount --rbind /sys "$target/sys" && mount --make-rslave "$target/sys"
 mount --rbind /dev "$target/dev" && mount --make-rslave "$target/dev"
@@ -119,9 +120,11 @@ in_root() {
 
 t=$(stamp)
 echo "=== Dependencies (scripts/install-deps.sh in the root) ==="
+# An install that a killed run left half done.
+if [ -n "$(ls -A "$target/var/lib/dpkg/updates" 2>/dev/null)" ]; then in_root 'dpkg --configure -a'; fi
 in_root ./scripts/install-deps.sh
 phase_done dependencies "$t"
-in_root 'echo "OpenMM $(/usr/bin/python3 -c "import openmm; print(openmm.version.full_version)"), $(/usr/bin/python3 --version), $(swig -version | grep -m1 Version)"'
+in_root 'echo "OpenMM $(/usr/bin/python3 -c "import openmm; print(openmm.version.short_version)"), $(/usr/bin/python3 --version), $(swig -version | grep -m1 Version)"'
 
 t=$(stamp)
 echo "=== Build (scripts/build.sh in the root) ==="
