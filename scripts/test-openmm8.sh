@@ -12,6 +12,7 @@
 # with 77. Set MRATTLE_DEBIAN_MIRROR to choose the mirror.
 # Usage: scripts/test-openmm8.sh [CTest arguments, e.g. -R Python]
 set -euo pipefail
+{  # read whole before running: an edit to this file during a run does not change that run
 repo="$(cd "$(dirname "$0")/.." && pwd)"
 target="${MRATTLE_TRIXIE_ROOT:-/var/cache/mrattle/trixie-root}"
 suite=trixie
@@ -137,5 +138,6 @@ status=0
 in_root './scripts/test.sh "$@"' "$@" || status=$?
 phase_done tests "$t"
 phases+=("total: $(( $(stamp) - start )) s")
-echo "=== OpenMM 8.1.2 leg (trixie): $( [ $status -eq 0 ] && echo passed || echo FAILED ); ${phases[*]} ==="
+echo "=== OpenMM 8 leg (trixie): $( [ $status -eq 0 ] && echo passed || echo FAILED ); ${phases[*]} ==="
 exit $status
+}
