@@ -1,17 +1,83 @@
 #!/usr/bin/env bash
-# Install the Debian packages the project needs, only if some are missing.
+# Install the Debian packages the project needs, only for what is missing. Each need is
+# checked by what the package provides (a command, a header, a library, a module that the
+# Python interpreter CMake will choose can import), not by the package's name, so a machine
+# that has everything runs no apt at all, whichever package brought it (on Debian 13
+# python3-simtk is only a virtual package that python3-openmm provides).
+# Where a package's name differs between releases the names are listed by preference
+# ("python3-openmm|python3-simtk"): the first one this release's apt sources have is used.
 set -euo pipefail
-packages=(cmake g++ make libopenmm-dev libopenmm-plugins python3-simtk libeigen3-dev libgtest-dev
-          libbenchmark-dev swig python3-dev python3-pytest python3-numpy python3-matplotlib
-          pocl-opencl-icd ocl-icd-opencl-dev)  # an OpenCL device on the CPU, and the headers: the OpenCL kernels
-missing=()
-for p in "${packages[@]}"; do
-    dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
+
+# The interpreter CMake chooses (python/CMakeLists.txt): 'python3' on PATH if it can
+# import openmm, else Debian's /usr/bin/python3.
+python=/usr/bin/python3
+if command -v python3 >/dev/null 2>&1 && python3 -c 'import openmm' >/dev/null 2>&1; then
+    python="$(command -v python3)"
+fi
+
+exists() { local f; for f in "$@"; do [ -e "$f" ] && return 0; done; return 1; }  # any of (globs)
+runs() { command -v "$1" >/dev/null 2>&1; }
+imports() { [ -x "$python" ] && "$python" -c "import $1" >/dev/null 2>&1; }
+has_python_headers() {
+    [ -x "$python" ] && "$python" -c 'import os, sys, sysconfig
+sys.exit(not os.path.exists(os.path.join(sysconfig.get_paths()["include"], "Python.h")))' >/dev/null 2>&1
+}
+
+# Fills 'missing' with one entry per unmet need: "package[|alternative...]  (what is missing)".
+check() {
+    missing=()
+    need() { local what="$1" packages="$2"; shift 2; "$@" || missing+=("$packages  ($what)"); }
+    need "cmake"                           cmake              runs cmake
+    need "g++"                             g++                runs g++
+    need "make"                            make               runs make
+    need "OpenMM.h"                        libopenmm-dev      exists /usr/include/OpenMM.h
+    need "libOpenMM.so"                    libopenmm-dev      exists /usr/lib/*/libOpenMM.so /usr/lib/libOpenMM.so
+    need "OpenMM's OpenCL headers"         libopenmm-dev      exists /usr/include/openmm/opencl/OpenCLPlatform.h
+    need "OpenMM's CPU and OpenCL platforms" libopenmm-plugins \
+        exists /usr/lib/*/openmm/plugins/libOpenMMCPU.so
+    need "OpenMM's OpenCL platform"        libopenmm-plugins  exists /usr/lib/*/openmm/plugins/libOpenMMOpenCL.so
+    need "$python: import openmm"          "python3-openmm|python3-simtk" imports openmm
+    need "$python: import numpy"           python3-numpy      imports numpy
+    need "$python: import pytest"          python3-pytest     imports pytest
+    need "$python: import matplotlib"      python3-matplotlib imports matplotlib
+    need "$python: Python.h"               python3-dev        has_python_headers
+    need "swig"                            swig               runs swig
+    need "Eigen 3 and its CMake config"    libeigen3-dev \
+        exists /usr/share/eigen3/cmake/Eigen3Config.cmake /usr/lib/cmake/eigen3/Eigen3Config.cmake
+    need "gtest/gtest.h"                   libgtest-dev       exists /usr/include/gtest/gtest.h
+    need "libgtest"                        libgtest-dev       exists /usr/lib/*/libgtest.a /usr/lib/*/libgtest.so
+    need "benchmark/benchmark.h"           libbenchmark-dev   exists /usr/include/benchmark/benchmark.h
+    need "CL/cl.h"                         ocl-icd-opencl-dev exists /usr/include/CL/cl.h
+    need "libOpenCL.so"                    ocl-icd-opencl-dev exists /usr/lib/*/libOpenCL.so
+    # An OpenCL device on the CPU, which the OpenCL tests use.
+    need "pocl's OpenCL driver"            pocl-opencl-icd    exists /etc/OpenCL/vendors/pocl.icd
+}
+
+check
+[ ${#missing[@]} -eq 0 ] && exit 0
+echo "install-deps.sh: missing:"
+printf '  %s\n' "${missing[@]}"
+SUDO=""
+[ "$(id -u)" -ne 0 ] && SUDO="sudo"
+$SUDO apt-get update -qq
+packages=()
+for entry in "${missing[@]}"; do
+    chosen=""
+    for name in $(echo "${entry%%  (*}" | tr '|' ' '); do
+        policy="$(apt-cache policy "$name" 2>/dev/null)"
+        if [[ "$policy" =~ Candidate:\ [^\(] ]]; then chosen="$name"; break; fi
+    done
+    [ -n "$chosen" ] || { echo "install-deps.sh: no package ${entry%%  (*} in this system's apt sources" >&2; exit 1; }
+    packages+=("$chosen")
 done
+mapfile -t packages < <(printf '%s\n' "${packages[@]}" | sort -u)
+log="$(mktemp -t mrattle-apt.XXXXXX.log)"
+echo "install-deps.sh: installing ${packages[*]} (apt's output: $log)"
+DEBIAN_FRONTEND=noninteractive $SUDO apt-get install -y -q --no-install-recommends "${packages[@]}" > "$log" 2>&1 || {
+    tail -n 40 "$log" >&2; echo "install-deps.sh: apt-get install failed (log: $log)" >&2; exit 1; }
+check
 if [ ${#missing[@]} -gt 0 ]; then
-    echo "Installing missing packages: ${missing[*]}"
-    SUDO=""
-    [ "$(id -u)" -ne 0 ] && SUDO="sudo"
-    $SUDO apt-get update -qq
-    DEBIAN_FRONTEND=noninteractive $SUDO apt-get install -y -qq "${missing[@]}"
+    echo "install-deps.sh: still missing after installing (is $python the interpreter you meant?):" >&2
+    printf '  %s\n' "${missing[@]}" >&2
+    exit 1
 fi

@@ -63,36 +63,60 @@ TEST_P(BodyEnvironment, VirtualSitesFollowTheirParents) {
             nonbonded.addException(m, atom, 0, 1, 0);
         sites.push_back(m);
     }
-    // The same 1 ps at 2 fs and 1 fs: the forces on M must reach the bodies for the energy
-    // error to be second order.
-    vector<double> fluctuation;
-    for (double h : {0.002, 0.001}) {
+    // The forces on M must reach the bodies for the energy error to be second order: the
+    // energy fluctuation over 1 ps at 2 fs must be 4 times that at 1 fs (log2 of the ratio,
+    // the order, 2). That holds on average only: the trajectory is chaotic, and over 20
+    // starts the order of one start spread by 0.13 (MRattle) to 0.21 (splitting), ratios
+    // of 3.3 to 5.6 (OpenMM 7.7, Reference and CPU; a single start judged against 4 +- 1
+    // failed with another build's CPU rounding at 5.36). So the order is the mean over
+    // several starts (velocity seeds), with its standard error.
+    const int starts = 10;
+    vector<double> fluctuation[2];  // per start, at 2 fs and at 1 fs
+    for (int k = 0; k < 2; k++) {
+        const double h = (k == 0 ? 0.002 : 0.001);
+        // One Context per step size (a new one per start costs seconds on OpenCL); each
+        // start sets positions and velocities anew, and a velocity Verlet step depends on
+        // nothing else.
         std::unique_ptr<RigidBodyIntegrator> integrator = makeIntegrator(h);
         std::unique_ptr<Context> context = makeContext(*c.system, *integrator);
-        context->setPositions(c.positions);
-        context->setVelocitiesToTemperature(300, 3);
-        EXPECT_EQ(c.molecules, integrator->getBodiesInEffect());
-        EXPECT_TRUE(integrator->getFreeParticles().empty());
-        EXPECT_EQ(8 * 6, integrator->getNumDegreesOfFreedom());
-        vector<double> energy;
-        double worstSite = 0;
-        for (int sample = 0; sample < 100; sample++) {
-            integrator->step((int) std::lround(0.01 / h));
-            State s = context->getState(State::Positions | State::Energy);
-            const vector<Vec3>& x = s.getPositions();
-            energy.push_back(s.getKineticEnergy() + s.getPotentialEnergy());
-            for (size_t k = 0; k < sites.size(); k++) {
-                const vector<int>& w = c.molecules[k];
-                worstSite = std::max(worstSite, maxDeviation({x[sites[k]]}, {x[w[0]] * wO + x[w[1]] * wH + x[w[2]] * wH}));
+        for (int seed = 1; seed <= starts; seed++) {
+            context->setPositions(c.positions);
+            context->setVelocitiesToTemperature(300, seed);
+            EXPECT_EQ(c.molecules, integrator->getBodiesInEffect());
+            EXPECT_TRUE(integrator->getFreeParticles().empty());
+            EXPECT_EQ(8 * 6, integrator->getNumDegreesOfFreedom());
+            vector<double> energy;
+            double worstSite = 0, worstShape = 0;
+            for (int sample = 0; sample < 100; sample++) {
+                integrator->step((int) std::lround(0.01 / h));
+                State s = context->getState(State::Positions | State::Energy);
+                const vector<Vec3>& x = s.getPositions();
+                energy.push_back(s.getKineticEnergy() + s.getPotentialEnergy());
+                for (size_t m = 0; m < sites.size(); m++) {
+                    const vector<int>& w = c.molecules[m];
+                    worstSite = std::max(worstSite, maxDeviation({x[sites[m]]}, {x[w[0]] * wO + x[w[1]] * wH + x[w[2]] * wH}));
+                }
+                worstShape = std::max(worstShape, maxDistanceChange(c.positions, x, c.molecules));
             }
-            EXPECT_LT(maxDistanceChange(c.positions, x, c.molecules), 1e-12);
+            EXPECT_LT(worstSite, 1e-12);
+            EXPECT_LT(worstShape, 1e-12);
+            fluctuation[k].push_back(standardDeviation(energy));
         }
-        EXPECT_LT(worstSite, 1e-12);
-        fluctuation.push_back(standardDeviation(energy));
     }
-    std::cout << "TIP4P-like cluster: energy std " << fluctuation[0] << " (2 fs) " << fluctuation[1]
-              << " (1 fs) kJ/mol, ratio " << fluctuation[0] / fluctuation[1] << std::endl;
-    EXPECT_NEAR(4.0, fluctuation[0] / fluctuation[1], 1.0);
+    vector<double> order;
+    for (int i = 0; i < starts; i++) {
+        order.push_back(std::log2(fluctuation[0][i] / fluctuation[1][i]));
+        std::cout << "TIP4P-like cluster, start " << i + 1 << ": energy std " << fluctuation[0][i] << " (2 fs) "
+                  << fluctuation[1][i] << " (1 fs) kJ/mol, order " << order.back() << std::endl;
+    }
+    const double meanOrder = mean(order), error = standardDeviation(order) / std::sqrt(starts - 1.0);
+    std::cout << "TIP4P-like cluster: order " << meanOrder << " +- " << error << " over " << starts << " starts"
+              << std::endl;
+    // The band of the single-run check this replaces (a ratio of 4 +- 1: order 1.58-2.32),
+    // now on a mean whose error is known to be a fraction of the band's width.
+    EXPECT_GT(meanOrder, std::log2(3.0));
+    EXPECT_LT(meanOrder, std::log2(5.0));
+    EXPECT_LT(error, 0.1);
 }
 
 namespace {
