@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # Install the Debian packages the project needs, only if some are missing.
 set -euo pipefail
-packages=(cmake g++ make libopenmm-dev libopenmm-plugins python3-simtk libeigen3-dev libgtest-dev
+packages=(cmake g++ make libopenmm-dev libopenmm-plugins python3-simtk libeigen3-dev liblbfgs-dev libgtest-dev
           libbenchmark-dev swig python3-dev python3-pytest python3-numpy python3-matplotlib
           pocl-opencl-icd ocl-icd-opencl-dev)  # an OpenCL device on the CPU, and the headers: the OpenCL kernels
 missing=()
