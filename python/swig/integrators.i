@@ -19,6 +19,7 @@ from openmm import unit
 #include "MRattleIntegrator.h"
 #include "MRattleLangevinIntegrator.h"
 #include "RigidSplittingIntegrator.h"
+#include "RigidBodyMinimizer.h"
 #include <climits>
 #include <exception>
 #include <vector>
@@ -173,6 +174,9 @@ MRATTLE_INTEGRATOR(RigidSplittingIntegrator, "RigidSplittingIntegrator.h")
     val = val/unit.picosecond
 %}
 %include "MRattleLangevinIntegrator.h"
+
+/* The rigid-body minimizer; mrattle.minimizeEnergy (minimize.py) adds units. */
+%include "RigidBodyMinimizer.h"
 
 /*
  * OpenMM's XmlSerializer returns deserialized integrators as plain openmm.Integrator
