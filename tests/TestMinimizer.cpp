@@ -126,6 +126,33 @@ TEST_P(Minimizer, BenzeneClusterLowersEnergyKeepsShapesAndStepsRigidly) {
     EXPECT_NEAR(minimum, again.finalEnergy, 1e-12 * std::fabs(minimum));
 }
 
+TEST_P(Minimizer, ClashingStartIsResolved) {
+    // Two atoms of different molecules about 0.05 nm apart: forces of ~1e12 kJ/mol/nm, which
+    // platforms that sum in fixed point clip (the minimizer then computes them on the CPU).
+    Cluster cluster = buildCluster(benzene(), 2, 0.62, 8);
+    // Molecule 1 slides towards molecule 0 along the line of their centres until two atoms are 0.05 nm apart.
+    auto closest = [&]() {
+        double d = 1e9;
+        for (int i : cluster.molecules[0])
+            for (int j : cluster.molecules[1])
+                d = std::min(d, std::sqrt((cluster.positions[i] - cluster.positions[j]).dot(cluster.positions[i] - cluster.positions[j])));
+        return d;
+    };
+    const Vec3 towards = (cluster.positions[cluster.molecules[0][0]] - cluster.positions[cluster.molecules[1][0]]) * 1e-4;
+    while (closest() > 0.05)
+        for (int i : cluster.molecules[1])
+            cluster.positions[i] += towards;
+    std::unique_ptr<RigidBodyIntegrator> integrator = makeIntegrator(0.002);
+    std::unique_ptr<Context> context = makeContext(*cluster.system, *integrator);
+    context->setPositions(cluster.positions);
+    const double start = potentialEnergy(*context);
+    ASSERT_GT(start, 1e8);
+    RigidBodyMinimizationReport report = RigidBodyMinimizer::minimize(*context, 10, 300);
+    EXPECT_LT(report.finalEnergy, 0.0) << report.iterations << " iterations, " << report.evaluations << " evaluations, rms " << report.rmsForce;
+    EXPECT_NEAR(report.finalEnergy, potentialEnergy(*context), 1e-6 * std::fabs(report.finalEnergy) + 1e-6);
+    EXPECT_LT(maxDistanceChange(cluster.positions, positionsOf(*context), cluster.molecules), 1e-12);
+}
+
 INSTANTIATE_TEST_SUITE_P(AllPlatforms, Minimizer, ::testing::ValuesIn(configsOf("MRattle")), configName);
 
 TEST(MinimizerReference, RigidWaterMinimumIsLocalEnergyMinimizersWithSettle) {

@@ -4,6 +4,7 @@
 #include "openmm/CompoundIntegrator.h"
 #include "openmm/OpenMMException.h"
 #include "openmm/State.h"
+#include "openmm/VerletIntegrator.h"
 #include <Eigen/Dense>
 #include <lbfgs.h>
 #include <algorithm>
@@ -89,6 +90,8 @@ public:
         : context(context), system(context.getSystem()), topology(integrator.getTopology()),
           tolerance(tolerance), maxIterations(maxIterations) {
         groups = context.getIntegrator().getIntegrationForceGroups();
+        const std::string platform = context.getPlatform().getName();
+        clipsLargeForces = platform == "OpenCL" || platform == "CUDA" || platform == "HIP";
         workingConstraintTolerance = std::max(1e-4, integrator.getConstraintTolerance());
         springConstant = 100 / workingConstraintTolerance;
     }
@@ -119,9 +122,18 @@ private:
     void rebase();
     double maxFreeConstraintError(const vector<Vec3>& positions) const;
     void setContextPositions(const vector<Vec3>& positions);
+    static bool hasLargeForce(const vector<Vec3>& forces);
+    State hostForces();
     [[noreturn]] void fail(const std::string& what);
 
     Context& context;
+    /**
+     * Platforms that sum forces in fixed point clip very large ones: then, as
+     * LocalEnergyMinimizer does, the forces are recomputed on the CPU (or Reference) platform.
+     */
+    bool clipsLargeForces;
+    VerletIntegrator hostIntegrator{1.0};
+    std::unique_ptr<Context> hostContext;
     const System& system;
     const RigidBodyTopology& topology;
     double tolerance;
@@ -236,6 +248,29 @@ void Search::setContextPositions(const vector<Vec3>& positions) {
     context.computeVirtualSites();
 }
 
+bool Search::hasLargeForce(const vector<Vec3>& forces) {
+    for (const Vec3& f : forces)
+        if (!(std::fabs(f[0]) < 2e9 && std::fabs(f[1]) < 2e9 && std::fabs(f[2]) < 2e9))
+            return true;
+    return false;
+}
+
+State Search::hostForces() {
+    if (hostContext == nullptr) {
+        Platform* host;
+        try {
+            host = &Platform::getPlatformByName("CPU");
+        } catch (const OpenMMException&) {
+            host = &Platform::getPlatformByName("Reference");
+        }
+        hostContext.reset(new Context(system, hostIntegrator, *host));
+        hostContext->setState(context.getState(State::Positions | State::Parameters));
+    }
+    hostContext->setPositions(trial);
+    hostContext->computeVirtualSites();
+    return hostContext->getState(State::Forces | State::Energy, false, groups);
+}
+
 double Search::evaluate(const double* variables, double* g) {
     // liblbfgs is C: nothing may be thrown through it. After a failure every further
     // evaluation is refused at once, so the line search gives up and liblbfgs returns its
@@ -259,8 +294,10 @@ double Search::evaluateUnchecked(const double* variables, double* g) {
     if (!std::isfinite(positionNorm2))
         throw OpenMMException("the search reached positions that are not finite");
     setContextPositions(trial);
-    const State state = context.getState(State::Forces | State::Energy, false, groups);
+    State state = context.getState(State::Forces | State::Energy, false, groups);
     evaluations++;
+    if (clipsLargeForces && hasLargeForce(state.getForces()))
+        state = hostForces();
     double energy = state.getPotentialEnergy();
     if (!std::isfinite(energy))
         throw OpenMMException("the potential energy is not finite (" + std::to_string(energy) + ")");
