@@ -154,6 +154,13 @@ private:
     struct Point {
         double energy = 0, gradientNorm2 = 0, positionNorm = 0;
     } last, accepted;
+    /** The last evaluation, for liblbfgs's repeat of it; invalid once the variables or springs change meaning. */
+    struct {
+        bool valid = false;
+        vector<double> variables, gradient;
+        Point point;
+        double value = 0;
+    } cached;
     int iterations = 0, evaluations = 0;
     std::string failure;  // set when an evaluation found something not finite
 };
@@ -176,6 +183,7 @@ void Search::setUpBodies(const vector<Vec3>& positions) {
 }
 
 void Search::restartAt(const vector<Vec3>& positions, bool resetOrientations) {
+    cached.valid = false;
     // The variables describe moves from here: bodies at u = v = 0 about their present frame.
     const vector<double>& masses = topology.getMasses();
     int offset = 0;
@@ -277,7 +285,20 @@ double Search::evaluate(const double* variables, double* g) {
     // last iterate, the best point found.
     if (failure.empty()) {
         try {
-            return evaluateUnchecked(variables, g);
+            // liblbfgs starts each search by evaluating its starting point, evaluated already.
+            if (cached.valid && std::equal(variables, variables + paddedVariables, cached.variables.begin())) {
+                std::copy(cached.gradient.begin(), cached.gradient.end(), g);
+                last = cached.point;
+                return cached.value;
+            }
+            cached.valid = false;
+            const double value = evaluateUnchecked(variables, g);
+            cached.variables.assign(variables, variables + paddedVariables);
+            cached.gradient.assign(g, g + paddedVariables);
+            cached.point = last;
+            cached.value = value;
+            cached.valid = true;
+            return value;
         } catch (const std::exception& e) {
             failure = e.what();
         }
@@ -427,9 +448,9 @@ void Search::fail(const std::string& what) {
 RigidBodyMinimizationReport Search::run() {
     freeParticles = topology.getFreeParticles();
     try {
-        // Refuses a Context whose positions were never set (getState(Positions) would not).
-        context.getState(State::Energy, false, groups);
-        evaluations++;
+        // Refuses a Context whose positions were never set (getState(Positions) would not);
+        // with no force group selected it computes nothing.
+        context.getState(State::Energy, false, 0);
     } catch (const OpenMMException& e) {
         throw OpenMMException(Prefix + e.what());
     }
@@ -494,6 +515,7 @@ RigidBodyMinimizationReport Search::run() {
             break;  // the constraints hold, or stiffer springs do not help (applyConstraints below)
         previousMaxError = maxError;
         springConstant *= 10;
+        cached.valid = false;
         if (maxError > 100 * workingConstraintTolerance)
             restartAt(startPositions, true);  // far from valid: start again, as LocalEnergyMinimizer does
         else
