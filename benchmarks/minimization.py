@@ -6,7 +6,7 @@ runs the C++ program minimize_compare (which times both minimizers from the same
 counts LocalEnergyMinimizer's iterations in a second, untimed run), then prints a Markdown
 table and writes docs/results/minimization.csv.
 
-    /usr/bin/python3 benchmarks/minimization.py [--build build] [--platform CPU] [--quick]
+    /usr/bin/python3 benchmarks/minimization.py [--build build] [--platform CPU] [--quick] [--only NAME] [--repeats 3]
 """
 import argparse
 import csv
@@ -43,6 +43,7 @@ def cases(quick):
     yield 'liquid benzene (PME)', 1.0, lambda: model(mrattle.models.benzeneLiquid)
     yield 'liquid benzene (PME)', 10.0, lambda: model(mrattle.models.benzeneLiquid)
     yield 'tip3p.pdb (rigid water, PME)', 10.0, lambda: pdbCase('tip3p.pdb', ['tip3p.xml'])
+    yield 'tip3p.pdb (rigid water, PME)', 5.0, lambda: pdbCase('tip3p.pdb', ['tip3p.xml'])
     yield 'test.pdb (rigid water, HBonds protein, PME)', 10.0, lambda: pdbCase(
         'test.pdb', ['amber14-all.xml', 'amber14/tip3p.xml'], constraints=app.HBonds)
 
@@ -52,6 +53,7 @@ def main():
     parser.add_argument('--build', default=os.path.join(root, 'build'))
     parser.add_argument('--platform', default='CPU')
     parser.add_argument('--quick', action='store_true', help='the benzene cluster only')
+    parser.add_argument('--only', help='the cases whose name contains this (no CSV is written)')
     parser.add_argument('--repeats', type=int, default=3, help='runs of each minimizer, alternated; the fastest counts')
     parser.add_argument('--out', default=os.path.join(root, 'docs', 'results', 'minimization.csv'))
     args = parser.parse_args()
@@ -61,6 +63,8 @@ def main():
     program = os.path.join(args.build, 'benchmarks', 'minimize_compare')
     rows, notes = [], []
     for name, tolerance, build in cases(args.quick):
+        if args.only and args.only not in name:
+            continue
         system, positions, bodies = build()
         with tempfile.TemporaryDirectory() as scratch:
             with open(os.path.join(scratch, 'system.xml'), 'w') as f:
@@ -82,7 +86,7 @@ def main():
         print('\n'.join(lines[1:]), flush=True)
     fields = ['case', 'tolerance', 'minimizer', 'iterations', 'evaluations', 'energy_before', 'energy_after',
               'rms_force', 'max_shape_change', 'seconds', 'note']
-    if not args.quick:
+    if not args.quick and not args.only:
         with open(args.out, 'w', newline='') as f:
             writer = csv.DictWriter(f, fieldnames=fields)
             writer.writeheader()

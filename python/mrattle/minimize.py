@@ -78,5 +78,8 @@ def installSimulationHook():
                             'are supported (the rigid-body minimizer takes no reporter), got %s' % (extra,))
         minimizeEnergy(self.context, tolerance, maxIterations)
 
+    simulationMinimizeEnergy.__doc__ = (openmmMinimizeEnergy.__doc__ or '') + (
+        '\n        With a mrattle integrator (also inside a CompoundIntegrator) this is mrattle.minimizeEnergy:\n'
+        '        the rigid bodies translate and rotate, keeping their shapes.\n')
     simulationMinimizeEnergy._mrattleOpenMM = openmmMinimizeEnergy
     app.Simulation.minimizeEnergy = simulationMinimizeEnergy
