@@ -42,9 +42,9 @@ def cases(quick):
         return
     yield 'liquid benzene (PME)', 1.0, lambda: model(mrattle.models.benzeneLiquid)
     yield 'liquid benzene (PME)', 10.0, lambda: model(mrattle.models.benzeneLiquid)
-    yield 'tip3p.pdb (rigid water, PME)', 10.0, lambda: pdbCase('tip3p.pdb', ['tip3p.xml'])
-    yield 'tip3p.pdb (rigid water, PME)', 5.0, lambda: pdbCase('tip3p.pdb', ['tip3p.xml'])
-    yield 'test.pdb (rigid water, HBonds protein, PME)', 10.0, lambda: pdbCase(
+    yield 'tip3p.pdb (rigid water; PME)', 10.0, lambda: pdbCase('tip3p.pdb', ['tip3p.xml'])
+    yield 'tip3p.pdb (rigid water; PME)', 5.0, lambda: pdbCase('tip3p.pdb', ['tip3p.xml'])
+    yield 'test.pdb (rigid water; HBonds protein; PME)', 10.0, lambda: pdbCase(
         'test.pdb', ['amber14-all.xml', 'amber14/tip3p.xml'], constraints=app.HBonds)
 
 
