@@ -44,6 +44,8 @@ check() {
     need "swig"                            swig               runs swig
     need "Eigen 3 and its CMake config"    libeigen3-dev \
         exists /usr/share/eigen3/cmake/Eigen3Config.cmake /usr/lib/cmake/eigen3/Eigen3Config.cmake
+    need "lbfgs.h (the minimizer)"         liblbfgs-dev       exists /usr/include/lbfgs.h
+    need "liblbfgs"                        liblbfgs-dev       exists /usr/lib/*/liblbfgs.so
     need "gtest/gtest.h"                   libgtest-dev       exists /usr/include/gtest/gtest.h
     need "libgtest"                        libgtest-dev       exists /usr/lib/*/libgtest.a /usr/lib/*/libgtest.so
     need "benchmark/benchmark.h"           libbenchmark-dev   exists /usr/include/benchmark/benchmark.h

@@ -79,10 +79,12 @@ from .interactions import removeIntraBodyInteractions
 from .topology import rigidBodies, declareRigidBodies
 from . import models
 from .serialization import asPluginIntegrator, installXmlSerializerHooks as _installXmlSerializerHooks
+from .minimize import minimizeEnergy, RigidBodyMinimizer, installSimulationHook as _installSimulationHook
 
 _installXmlSerializerHooks()
+_installSimulationHook()
 
 
 __all__ = ['RigidBodyIntegrator', 'MRattleIntegrator', 'MRattleLangevinIntegrator', 'RigidSplittingIntegrator', 'StateDataReporter', 'ProgressReporter', 'degreesOfFreedom',
-           'kineticTemperature', 'removeIntraBodyInteractions', 'rigidBodies', 'declareRigidBodies', 'asPluginIntegrator', 'models', 'PLUGIN_PATH',
+           'kineticTemperature', 'removeIntraBodyInteractions', 'rigidBodies', 'declareRigidBodies', 'asPluginIntegrator', 'minimizeEnergy', 'RigidBodyMinimizer', 'models', 'PLUGIN_PATH',
            'PLUGIN_PATHS', 'PLATFORMS', 'DEVICE_PLATFORMS']

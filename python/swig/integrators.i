@@ -19,6 +19,7 @@ from openmm import unit
 #include "MRattleIntegrator.h"
 #include "MRattleLangevinIntegrator.h"
 #include "RigidSplittingIntegrator.h"
+#include "RigidBodyMinimizer.h"
 #include <climits>
 #include <exception>
 #include <vector>
@@ -224,6 +225,9 @@ void _checkWellFormedXml(const char* document) {
     MRattlePlugin::checkWellFormedXml(document);
 }
 %}
+
+/* The rigid-body minimizer; mrattle.minimizeEnergy (minimize.py) adds units. */
+%include "RigidBodyMinimizer.h"
 
 /*
  * OpenMM's XmlSerializer returns deserialized integrators as plain openmm.Integrator

@@ -8,6 +8,8 @@
 
 namespace OpenMM {
 
+class Context;  /* passed through by pointer: the Python class is openmm.Context */
+
 class Integrator {
 public:
     virtual ~Integrator();

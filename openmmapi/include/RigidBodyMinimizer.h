@@ -1,0 +1,78 @@
+#ifndef MRATTLE_RIGID_BODY_MINIMIZER_H_
+#define MRATTLE_RIGID_BODY_MINIMIZER_H_
+
+#include "openmm/Context.h"
+#include "internal/windowsExportMRattle.h"
+
+namespace MRattlePlugin {
+
+/** What one RigidBodyMinimizer::minimize() call did. Energies in kJ/mol, forces in kJ/mol/nm. */
+struct OPENMM_EXPORT_MRATTLE RigidBodyMinimizationReport {
+    /** L-BFGS iterations (accepted line searches), over all of its restarts. */
+    int iterations = 0;
+    /** Energy and force evaluations (Context::getState calls with forces). */
+    int evaluations = 0;
+    /** Potential energy at the start (after the free particles' constraints are applied) and at the end. */
+    double initialEnergy = 0, finalEnergy = 0;
+    /**
+     * Root mean square over the System's particles of the generalized force at the end,
+     * sqrt(|g|^2 / N): per body |F|^2/n + tau . I^-1 tau (net force F and torque tau about its
+     * centroid, I its inertia with unit masses: the force projected on rigid motion), plus each
+     * free particle's |f|^2 with the constraint springs.
+     */
+    double rmsForce = 0;
+};
+
+/**
+ * LocalEnergyMinimizer for rigid bodies: searches for a local minimum of the potential energy
+ * over the rigid-body coordinates of the bodies in effect of the Context's rigid-body
+ * integrator (RigidBodyIntegrator::getBodiesInEffect()). Each body moves by a translation of
+ * its centroid and a rotation applied to its shape at the start, which therefore never
+ * changes (to round-off); a linear body has two rotations, a point body none. Free particles
+ * move in Cartesian coordinates with their constraints held as LocalEnergyMinimizer holds
+ * them: harmonic springs, stiffened tenfold until every constraint is within
+ * max(1e-4, the integrator's constraint tolerance) nm of its length (OpenMM 7.7's test), then
+ * Context::applyConstraints(). Massless particles stay where they are and virtual sites
+ * follow their parents. The generalized forces are each body's net force and torque, from
+ * the forces of the integrator's integration force groups; the search is L-BFGS (liblbfgs,
+ * the code OpenMM's own minimizer embeds, with the same backtracking line search).
+ *
+ * It works through the public Context API (setPositions, computeVirtualSites, getState), as
+ * LocalEnergyMinimizer does on the host, so it runs unchanged on every platform the
+ * integrator runs on (Reference, CPU, OpenCL): its own work is O(N) per evaluation, next to
+ * the force evaluation that dominates both minimizers.
+ *
+ * After it, the Context holds the best point found: the energy is never above the starting
+ * one; the integrator's bodies keep their shapes, and the velocities are the integrator's
+ * projection onto rigid motion at the new positions (as after any setPositions()).
+ */
+class OPENMM_EXPORT_MRATTLE RigidBodyMinimizer {
+public:
+    /**
+     * Minimize the potential energy of a Context whose integrator is one of the plugin's
+     * rigid-body integrators (or a CompoundIntegrator holding one: its current integrator if
+     * that is a rigid-body one, else its first rigid-body member).
+     *
+     * @param context        the Context to minimize; on exit it holds the new positions
+     * @param tolerance      as LocalEnergyMinimizer's, in kJ/mol/nm: the search stops once
+     *                       |g| <= tolerance * max(1, |x|) / max(1, rms|x0|), the test of OpenMM
+     *                       7.7 to 8.4 (|x| over all Cartesian coordinates, x0 the start), i.e.
+     *                       about when the root mean square over particles of the (generalized)
+     *                       force, rmsForce, reaches the tolerance; OpenMM 8.5's GPU minimizer
+     *                       tests rms = tolerance exactly. Must be finite and >= 0 (default 10).
+     * @param maxIterations  the most L-BFGS iterations, as LocalEnergyMinimizer's (0: until
+     *                       converged); here counted over all restarts. Must be >= 0.
+     * @return what it did
+     * @throws OpenMMException for a bad argument, a Context without a rigid-body integrator or
+     *         without positions, or an energy, force or position that is not finite during the
+     *         search (naming it; the Context is then left at the best point found)
+     */
+    static RigidBodyMinimizationReport minimize(OpenMM::Context& context, double tolerance = 10,
+                                                int maxIterations = 0);
+    /** True if minimize() applies: the Context's integrator is, or holds, a rigid-body integrator. */
+    static bool appliesTo(OpenMM::Context& context);
+};
+
+} // namespace MRattlePlugin
+
+#endif
