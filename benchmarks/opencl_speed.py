@@ -50,7 +50,7 @@ def main():
     parser.add_argument('--precision', default='mixed', choices=['single', 'mixed', 'double'])
     parser.add_argument('--out', default=None, help='CSV file for the table')
     args = parser.parse_args()
-    if mrattle.OPENCL_PLUGIN_PATH is None:
+    if 'OpenCL' not in mrattle.DEVICE_PLATFORMS:
         sys.exit('no OpenCL kernels or no OpenCL platform: nothing to measure')
     dt = 0.002
     models = [

@@ -22,12 +22,9 @@ using std::vector;
 namespace {
 
 bool haveOpenCL() {
-#ifdef MRATTLE_HAVE_OPENCL
-    loadPlugins();
-    for (int i = 0; i < Platform::getNumPlatforms(); i++)
-        if (Platform::getPlatform(i).getName() == "OpenCL")
+    for (const string& name : devicePlatforms())
+        if (name == "OpenCL")
             return true;
-#endif
     return false;
 }
 

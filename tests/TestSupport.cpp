@@ -1,5 +1,6 @@
 #include "TestSupport.h"
 #include "MRattleBuildInfo.h"
+#include "MRattlePlatforms.h"
 #include "MRattleLangevinIntegrator.h"
 #include "RigidSplittingIntegrator.h"
 #include <gtest/gtest.h>
@@ -10,9 +11,6 @@
 #include <random>
 
 extern "C" void registerMRattleReferenceKernelFactories();
-#ifdef MRATTLE_HAVE_OPENCL
-extern "C" void registerMRattleOpenCLKernelFactories();
-#endif
 
 using namespace OpenMM;
 using std::vector;
@@ -26,13 +24,14 @@ void loadPlugins() {
         setenv("OPENMM_PLUGIN_DIR", MRATTLE_OPENMM_PLUGIN_DIR, 0);
         Platform::loadPluginsFromDirectory(Platform::getDefaultPluginsDirectory());
         registerMRattleReferenceKernelFactories();
-#ifdef MRATTLE_HAVE_OPENCL
-        bool haveOpenCL = false;
-        for (int i = 0; i < Platform::getNumPlatforms(); i++)
-            haveOpenCL |= (Platform::getPlatform(i).getName() == "OpenCL");
-        if (haveOpenCL)
-            registerMRattleOpenCLKernelFactories();
-#endif
+        // The device platforms' kernel plugins of this build, where OpenMM has the platform.
+        for (const MRattlePlugin::BuiltPlatform& built : MRattlePlugin::BuiltPlatforms) {
+            if (!built.device)
+                continue;
+            for (int i = 0; i < Platform::getNumPlatforms(); i++)
+                if (Platform::getPlatform(i).getName() == built.name)
+                    Platform::loadPluginLibrary(built.pluginPath);
+        }
     });
 }
 
@@ -53,23 +52,37 @@ bool havePlatform(const std::string& name) {
 
 } // namespace
 
+bool isDevicePlatform(const std::string& name) {
+    for (const MRattlePlugin::BuiltPlatform& built : MRattlePlugin::BuiltPlatforms)
+        if (built.device && name == built.name)
+            return true;
+    return false;
+}
+
+std::vector<std::string> devicePlatforms() {
+    std::vector<std::string> names;
+    for (const MRattlePlugin::BuiltPlatform& built : MRattlePlugin::BuiltPlatforms)
+        if (built.device && havePlatform(built.name))
+            names.push_back(built.name);
+    return names;
+}
+
 std::vector<Config> configsOf(const std::string& integrator) {
-    std::vector<Config> configs = {{"Reference", integrator}, {"CPU", integrator}};
-#ifdef MRATTLE_HAVE_OPENCL
-    // On OpenCL where the integrator's kernel is registered there (not the splitting baseline's).
-    static const std::map<std::string, std::string> kernels = {{"MRattle", "IntegrateMRattleStep"},
-                                                               {"MRattleLangevin", "IntegrateMRattleLangevinStep"}};
-    if (kernels.count(integrator) && havePlatform("OpenCL") &&
-        Platform::getPlatformByName("OpenCL").supportsKernels({kernels.at(integrator)}))
-        configs.push_back({"OpenCL", integrator});
-#endif
+    std::vector<Config> configs;
+    for (const MRattlePlugin::BuiltPlatform& built : MRattlePlugin::BuiltPlatforms) {
+        // The device platforms run every integrator but the splitting baseline.
+        if (built.device && (integrator == "RigidSplitting" || !havePlatform(built.name)))
+            continue;
+        configs.push_back({built.name, integrator});
+    }
     return configs;
 }
 
 std::vector<Config> allConfigs() {
-    std::vector<Config> configs = configsOf("MRattle");
-    for (const Config& config : configsOf("RigidSplitting"))
-        configs.push_back(config);
+    std::vector<Config> configs;
+    for (const std::string& integrator : {"MRattle", "RigidSplitting"})
+        for (const Config& config : configsOf(integrator))
+            configs.push_back(config);
     return configs;
 }
 
@@ -95,7 +108,7 @@ std::unique_ptr<MRattlePlugin::RigidBodyIntegrator> makeIntegrator(const std::st
 std::map<std::string, std::string> platformProperties(const std::string& name) {
     if (name == "CPU")
         return {{"Threads", "1"}};
-    if (name == "OpenCL")
+    if (isDevicePlatform(name))
         return {{"Precision", "double"}};  // the generic suites hold every platform to Reference's tolerances
     return {};
 }

@@ -22,15 +22,23 @@ OpenMM::Platform& platform(const std::string& name);
  * adding it there.
  */
 struct Config {
-    std::string platform;    // "Reference", "CPU"
-    std::string integrator;  // "MRattle", "RigidSplitting"
+    std::string platform;    // a name from the build's list of platforms (MRattlePlatforms.h)
+    std::string integrator;  // "MRattle", "MRattleLangevin", "RigidSplitting"
+    /** Velocity Verlet (MRattle, RigidSplitting): energy-conserving, deterministic, velocities at the positions' time. */
+    bool isVerlet() const {
+        return integrator != "MRattleLangevin";
+    }
 };
 /** How GoogleTest prints a Config (in test names and failures). */
 void PrintTo(const Config& config, std::ostream* out);
 /** Every platform with the plugin's kernels, times every rigid-body integrator. */
 std::vector<Config> allConfigs();
-/** Every platform, with one integrator. */
+/** Every platform that runs this integrator (the device platforms run all but RigidSplitting). */
 std::vector<Config> configsOf(const std::string& integrator);
+/** The device platforms (OpenCL, CUDA) of the build's list that OpenMM has here. */
+std::vector<std::string> devicePlatforms();
+/** Whether a platform of the build's list is a device platform. */
+bool isDevicePlatform(const std::string& name);
 /** "Reference_MRattle": a test-name suffix. */
 std::string configName(const ::testing::TestParamInfo<Config>& info);
 /** The integrator of that kind. */

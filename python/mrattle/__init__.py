@@ -1,8 +1,9 @@
 """M-RATTLE rigid-body integrators for OpenMM.
 
-``import mrattle`` registers the plugin's kernels with OpenMM's Reference and CPU
-platforms (and OpenCL, where the OpenCL kernels were built and OpenMM has that platform), so ``mrattle.MRattleIntegrator`` can be used anywhere an OpenMM integrator
-can::
+``import mrattle`` registers the plugin's kernels with every platform of its build that
+OpenMM has (Reference and CPU; OpenCL and CUDA where their kernels were built and OpenMM
+has that platform: ``mrattle.PLATFORMS`` lists them), so ``mrattle.MRattleIntegrator``
+can be used anywhere an OpenMM integrator can::
 
     import mrattle
     from openmm.unit import femtoseconds
@@ -19,7 +20,7 @@ import openmm as _openmm
 from . import _plugin_location
 
 
-def _loadKernelPlugin(relativePath, required):
+def _loadKernelPlugin(platform, relativePath, required):
     """Load a kernel plugin unless OpenMM already did (an install into its plugin folder)."""
     path = _os.path.normpath(_os.path.join(_os.path.dirname(_os.path.abspath(__file__)), relativePath))
     # Installed into OpenMM's own plugin folder, 'import openmm' has loaded it already:
@@ -36,8 +37,8 @@ def _loadKernelPlugin(relativePath, required):
     except Exception as error:
         if not required:
             import warnings
-            warnings.warn("mrattle: OpenMM could not load the OpenCL kernels %s (%s); MRattleIntegrator runs on "
-                          "Reference and CPU only" % (path, error))
+            warnings.warn("mrattle: OpenMM could not load the %s kernels %s (%s); the M-RATTLE integrators do "
+                          "not run on %s" % (platform, path, error, platform))
             return None
         raise ImportError("mrattle: OpenMM could not load the kernel plugin %s: %s" % (path, error)) from error
     return path
@@ -50,10 +51,28 @@ def _hasPlatform(name):
 # The SWIG module first: it loads libMRattlePlugin.so, which the kernel plugin needs.
 from .integrators import RigidBodyIntegrator, MRattleIntegrator, MRattleLangevinIntegrator, RigidSplittingIntegrator
 
-PLUGIN_PATH = _loadKernelPlugin(_plugin_location.PLUGIN_PATH, required=True)
-#: The OpenCL kernel plugin, or None where it was not built or OpenMM has no OpenCL platform.
-OPENCL_PLUGIN_PATH = (_loadKernelPlugin(_plugin_location.OPENCL_PLUGIN_PATH, required=False)
-                      if _plugin_location.OPENCL_PLUGIN_PATH and _hasPlatform('OpenCL') else None)
+def _loadKernelPlugins():
+    """{platform: kernel plugin path} for the build's platforms (_plugin_location.PLATFORMS) that OpenMM has."""
+    paths, loaded = {}, {}
+    for platform, kind, relativePath in _plugin_location.PLATFORMS:
+        if not _hasPlatform(platform):
+            continue
+        if relativePath not in loaded:  # Reference and CPU share one plugin
+            loaded[relativePath] = _loadKernelPlugin(platform, relativePath, required=(kind == 'host'))
+        if loaded[relativePath] is not None:
+            paths[platform] = loaded[relativePath]
+    return paths
+
+
+#: The kernel plugin serving each platform: {platform name: path}.
+PLUGIN_PATHS = _loadKernelPlugins()
+#: The platforms the plugin's kernels run on here, in the build's order (Reference, CPU, then the device platforms).
+PLATFORMS = list(PLUGIN_PATHS)
+#: The device platforms among them (OpenCL, CUDA): they run every integrator but RigidSplittingIntegrator.
+DEVICE_PLATFORMS = [platform for platform, kind, path in _plugin_location.PLATFORMS
+                    if kind == 'device' and platform in PLUGIN_PATHS]
+#: The Reference and CPU kernel plugin.
+PLUGIN_PATH = PLUGIN_PATHS['Reference']
 
 from .reporters import ProgressReporter, StateDataReporter, degreesOfFreedom, kineticTemperature
 from .interactions import removeIntraBodyInteractions
@@ -66,4 +85,4 @@ _installXmlSerializerHooks()
 
 __all__ = ['RigidBodyIntegrator', 'MRattleIntegrator', 'MRattleLangevinIntegrator', 'RigidSplittingIntegrator', 'StateDataReporter', 'ProgressReporter', 'degreesOfFreedom',
            'kineticTemperature', 'removeIntraBodyInteractions', 'rigidBodies', 'declareRigidBodies', 'asPluginIntegrator', 'models', 'PLUGIN_PATH',
-           'OPENCL_PLUGIN_PATH']
+           'PLUGIN_PATHS', 'PLATFORMS', 'DEVICE_PLATFORMS']

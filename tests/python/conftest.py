@@ -21,15 +21,29 @@ def pytest_collection_finish(session):
         raise pytest.UsageError('no Python tests were collected from %s' % os.path.dirname(__file__))
 
 
-@pytest.fixture(params=['Reference', 'CPU'])
+#: The host platforms of the build's list (Reference, CPU): every integrator runs there.
+HOST_PLATFORMS = [name for name in mrattle.PLATFORMS if name not in mrattle.DEVICE_PLATFORMS]
+
+
+@pytest.fixture(params=HOST_PLATFORMS)
 def platform(request):
-    """Each platform the plugin's kernels run on."""
+    """Each host platform the plugin's kernels run on (the device platforms have their own
+    tests: a device Context is slow to make through pocl)."""
+    return openmm.Platform.getPlatformByName(request.param)
+
+
+@pytest.fixture(params=mrattle.DEVICE_PLATFORMS or [pytest.param(None, marks=pytest.mark.skip(
+    reason='no device platform (OpenCL, CUDA) with the plugin\'s kernels in this OpenMM'))])
+def devicePlatform(request):
+    """Each device platform (OpenCL, CUDA) the plugin's kernels run on here."""
     return openmm.Platform.getPlatformByName(request.param)
 
 
 def platformProperties(platform):
-    """One CPU thread: deterministic sums, and the machine is shared."""
-    return {'Threads': '1'} if platform.getName() == 'CPU' else {}
+    """One CPU thread (deterministic sums, and the machine is shared); double precision on a device."""
+    if platform.getName() == 'CPU':
+        return {'Threads': '1'}
+    return {'Precision': 'double'} if platform.getName() in mrattle.DEVICE_PLATFORMS else {}
 
 
 def makeContext(system, integrator, platform, positions, velocities=None):

@@ -76,14 +76,7 @@ def test_selections_and_errors():
         mrattle.rigidBodies(pdb.topology, small)
 
 
-def platformNames():
-    names = ['Reference', 'CPU']
-    if mrattle.OPENCL_PLUGIN_PATH is not None:
-        names.append('OpenCL')
-    return names
-
-
-@pytest.mark.parametrize('platformName', platformNames())
+@pytest.mark.parametrize('platformName', mrattle.PLATFORMS)
 @pytest.mark.parametrize('pdbName,forceFieldName', [('tip3p.pdb', 'amber14/tip3p.xml'), ('tip4pew.pdb', 'amber14/tip4pew.xml'),
                                                      ('tip5p.pdb', 'tip5p.xml'), ('spce.pdb', 'amber14/spce.xml')])
 def test_waters_take_their_force_field_geometry(platformName, pdbName, forceFieldName):

@@ -2,6 +2,7 @@
 #include "ReferenceMRattleKernels.h"
 #include "ReferenceMRattleLangevinKernels.h"
 #include "ReferenceRigidSplittingKernels.h"
+#include "MRattlePlatforms.h"
 #include "internal/OpenMMVersionCheck.h"
 #include "openmm/OpenMMException.h"
 #include "openmm/Platform.h"
@@ -23,8 +24,16 @@ KernelImpl* ReferenceMRattleKernelFactory::createKernelImpl(std::string name, co
 
 namespace {
 
+/** A platform of the build's list that this plugin serves (Reference and CPU; the CPU platform derives from Reference). */
+bool isHostPlatform(const std::string& name) {
+    for (const BuiltPlatform& built : BuiltPlatforms)
+        if (!built.device && name == built.name)
+            return true;
+    return false;
+}
+
 /**
- * Register the kernels on every Reference-derived platform present. File-local: every
+ * Register the kernels on every host platform of the build's list that is present. File-local: every
  * plugin exports a registerKernelFactories(), and a call to that name could bind to
  * another plugin's.
  */
@@ -32,7 +41,7 @@ void registerOnReferenceAndCpu() {
     checkOpenMMVersion(Platform::getOpenMMVersion());
     for (int i = 0; i < Platform::getNumPlatforms(); i++) {
         Platform& platform = Platform::getPlatform(i);
-        if (platform.getName() == "Reference" || platform.getName() == "CPU") {
+        if (isHostPlatform(platform.getName())) {
             // One factory per platform: each Platform deletes the factories it holds.
             ReferenceMRattleKernelFactory* factory = new ReferenceMRattleKernelFactory();
             platform.registerKernelFactory(IntegrateMRattleStepKernel::Name(), factory);

@@ -1,6 +1,6 @@
-"""MRattleIntegrator on OpenMM's OpenCL platform from Python: app.Simulation with reporters,
-in each precision. Skipped where the OpenCL kernels were not built or OpenMM has no OpenCL
-platform (pocl gives one on a CPU)."""
+"""The M-RATTLE integrators on each device platform (OpenCL, CUDA) from Python: app.Simulation
+with reporters, in each precision. Skipped where no device platform has the plugin's kernels
+(pocl gives an OpenCL platform on a CPU)."""
 import io
 
 import numpy as np
@@ -10,24 +10,18 @@ from openmm import app, unit
 
 import mrattle
 
-needsOpenCL = pytest.mark.skipif(mrattle.OPENCL_PLUGIN_PATH is None,
-                                 reason='no OpenCL kernels or no OpenCL platform in this OpenMM')
-
-
-@needsOpenCL
 @pytest.mark.parametrize('precision', ['single', 'mixed', 'double'])
-def test_simulation_runs_on_opencl(precision):
+def test_simulation_runs_on_the_device(devicePlatform, precision):
     model = mrattle.models.waterBox(numMolecules=64, cutoff=0.45*unit.nanometers)
     integrator = mrattle.MRattleIntegrator(2*unit.femtoseconds)
-    platform = openmm.Platform.getPlatformByName('OpenCL')
-    simulation = app.Simulation(model.topology, model.system, integrator, platform, {'Precision': precision})
+    simulation = app.Simulation(model.topology, model.system, integrator, devicePlatform, {'Precision': precision})
     simulation.context.setPositions(model.positions)
     simulation.context.setVelocitiesToTemperature(300*unit.kelvin, 1)
     log = io.StringIO()
     simulation.reporters.append(mrattle.StateDataReporter(log, 10, step=True, temperature=True))
     start = simulation.context.getState(getPositions=True).getPositions(asNumpy=True).value_in_unit(unit.nanometers)
     simulation.step(50)
-    assert simulation.context.getPlatform().getName() == 'OpenCL'
+    assert simulation.context.getPlatform().getName() == devicePlatform.getName()
     assert integrator.getNumDegreesOfFreedom() == 64*6
     positions = simulation.context.getState(getPositions=True).getPositions(asNumpy=True).value_in_unit(unit.nanometers)
     assert np.abs(positions - start).max() > 1e-3
@@ -43,8 +37,7 @@ def test_simulation_runs_on_opencl(precision):
     assert len(temperatures) == 5 and all(100 < t < 600 for t in temperatures)
 
 
-@needsOpenCL
-def test_splitting_integrator_is_refused_on_opencl_with_its_platforms():
+def test_splitting_integrator_is_refused_on_the_device_with_its_platforms(devicePlatform):
     model = mrattle.models.benzene()
     with pytest.raises(openmm.OpenMMException, match='Reference and CPU platforms only'):
-        openmm.Context(model.system, mrattle.RigidSplittingIntegrator(0.002), openmm.Platform.getPlatformByName('OpenCL'))
+        openmm.Context(model.system, mrattle.RigidSplittingIntegrator(0.002), devicePlatform)
