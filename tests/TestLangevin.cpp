@@ -23,6 +23,9 @@ namespace {
 
 class Langevin : public ::testing::TestWithParam<string> {
 protected:
+    void SetUp() override {
+        MRATTLE_SKIP_IF_UNAVAILABLE(GetParam());
+    }
     std::unique_ptr<Context> makeContext(const System& system, Integrator& integrator) const {
         return std::unique_ptr<Context>(
             new Context(system, integrator, platform(GetParam()), platformProperties(GetParam())));
