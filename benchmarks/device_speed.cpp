@@ -21,7 +21,7 @@
  * whether the state is finite are recorded.
  *
  * Usage: device_speed [--platform CUDA] [--precision mixed] [--waters-per-side 20,32,69]
- *                     [--repeats 3] [--batch-seconds 1] [--warmup 50] [--budget SECONDS]
+ *                     [--repeats 3] [--batch-seconds 0.5] [--warmup 50] [--budget SECONDS]
  *                     [--plugins FILE[,FILE]] [--out FILE] [--ratios FILE] [--small]
  * --small: 6 waters per side (648 atoms), 2 repeats of 0.2 s, 5 warm-up steps.
  * --budget: a (size, System) group is not started once this many seconds have passed (it is
@@ -63,7 +63,7 @@ struct Options {
     vector<int> watersPerSide = {20, 32, 69};  // 24,000, 98,304 and 985,527 atoms
     vector<string> plugins;
     int repeats = 3, warmup = 50;
-    double batchSeconds = 1.0, budget = 0;
+    double batchSeconds = 0.5, budget = 0;
 };
 
 vector<string> split(const string& text) {
