@@ -51,7 +51,7 @@ stage_files() {
         echo "OpenMM: $(cached OPENMM_VERSION_STRING) ($openmm_lib)"
         local nvcc
         nvcc="$(cached CUDAToolkit_NVCC_EXECUTABLE)"
-        echo "CUDA toolkit: $("${nvcc:-nvcc}" --version 2>/dev/null | tail -1) (${nvcc:-nvcc})"
+        echo "CUDA toolkit: $("${nvcc:-nvcc}" --version 2>/dev/null | grep -o "release.*") (${nvcc:-nvcc})"
     } > "$stage/MANIFEST"
     (cd "$stage" && find . -type f | sort | xargs ls -l | awk '{print $5, $9}') >> "$stage/MANIFEST"
     local bytes limit=$((60 * 1024 * 1024))
@@ -94,13 +94,16 @@ run_check() {
     done
     local tests_status=0
     printf '%s\n' "${programs[@]}" | timeout 150 xargs -P 4 -I{} sh -c \
-        'name=$(basename "{}"); "{}" --gtest_filter="*CUDA*" --gtest_brief=1 > "'"$out"'/$name.txt" 2>&1; echo "$name: exit $?"' \
+        'name=$(basename "{}"); "{}" --gtest_filter="*CUDA*" > "'"$out"'/$name.txt" 2>&1; echo "$name: exit $?"' \
         > "$out/tests-summary.txt" || tests_status=$?
     if [ "$tests_status" = 124 ]; then
         echo "tests: stopped at 150 s; the programs not listed did not finish" >> "$out/tests-summary.txt"
     fi
     sort "$out/tests-summary.txt"
-    grep -h -E "^\[  (FAILED|SKIPPED) |PASSED|tests ran" "$out"/Test*.txt | sort | uniq -c | sort -rn | head -40 || true
+    # Each program's totals, then every failure and the distinct reasons for skipping.
+    grep -H -E "^\[  (PASSED|SKIPPED|FAILED) +\] [0-9]+ test" "$out"/Test*.txt | sed "s|^$out/||" || true
+    grep -h -E "^\[  FAILED  \] .*\(" "$out"/Test*.txt | head -40 || true
+    grep -h -A1 ": Skipped$" "$out"/Test*.txt | grep -v -E ": Skipped$|^--$" | sort | uniq -c | head -10 || true
 
     # 2. The benchmark: whatever of the 8 minutes is left, less a margin for writing back.
     local left=$((450 - (SECONDS - start)))
@@ -112,8 +115,10 @@ run_check() {
         2> "$out/device_speed.log" || status=$?
     echo "device_speed: exit $status"
     cat "$out/device_speed.log" | tail -30
-    column -s, -t < "$out/device_speed.csv" 2>/dev/null || cat "$out/device_speed.csv"
-    column -s, -t < "$out/device_speed_ratios.csv" 2>/dev/null || cat "$out/device_speed_ratios.csv"
+    local table
+    for table in "$out/device_speed.csv" "$out/device_speed_ratios.csv"; do
+        [ -f "$table" ] && { column -s, -t < "$table" 2>/dev/null || cat "$table"; }
+    done
     echo "gpu-check: done in $((SECONDS - start)) s; results in $out"
 }
 

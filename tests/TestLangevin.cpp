@@ -214,4 +214,6 @@ TEST(LangevinApi, RefusesBadParametersAndSerializes) {
     EXPECT_NE(string::npos, messageOf([&] { delete XmlSerializer::deserialize<Integrator>(bad); }).find("friction"));
 }
 
-INSTANTIATE_TEST_SUITE_P(Platforms, Langevin, ::testing::ValuesIn(langevinPlatforms()));
+// Named by platform ("Platforms/Langevin.X/CUDA"), so that a platform's cases can be selected.
+INSTANTIATE_TEST_SUITE_P(Platforms, Langevin, ::testing::ValuesIn(langevinPlatforms()),
+                         [](const ::testing::TestParamInfo<string>& info) { return info.param; });
