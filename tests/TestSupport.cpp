@@ -74,8 +74,8 @@ std::vector<std::string> devicePlatforms() {
 }
 
 std::string unavailable(const std::string& name) {
-    if (!isDevicePlatform(name))
-        return "";
+    if (!isDevicePlatform(name))  // a host platform: only whether OpenMM has it (an OpenMM built without CPU)
+        return havePlatform(name) ? "" : "OpenMM has no " + name + " platform here";
     static std::mutex mutex;
     static std::map<std::string, std::string> reasons;
     std::lock_guard<std::mutex> lock(mutex);

@@ -40,9 +40,10 @@ std::vector<std::string> devicePlatforms();
 /** Whether a platform of the build's list is a device platform. */
 bool isDevicePlatform(const std::string& name);
 /**
- * Why a device platform of the build's list cannot run here ("" if it can): OpenMM has no
- * such platform (its plugin did not load), or the platform has no device (CUDA without a
- * GPU: found by making a Context of one particle, once per process).
+ * Why a platform of the build's list cannot run here ("" if it can): OpenMM has no such
+ * platform (its plugin did not load, or OpenMM was built without it), or a device platform
+ * has no device (CUDA without a GPU: found by making a Context of one particle, once per
+ * process).
  */
 std::string unavailable(const std::string& name);
 /** In a test or SetUp(): skip, saying why, if the platform cannot run here. */
