@@ -158,6 +158,11 @@ def main():
         log("langevin: validation against LangevinMiddle + SETTLE (water NVT, NPT; liquid benzene)")
         md += langevin.run(q, os.path.join(results_dir, "langevin"), log)
 
+    if "equipartition" in parts:
+        log("equipartition: rigid TIP3P and SPC/E water, NVE at 0.5-4 fs (translational against rotational T)")
+        from suite import equipartition
+        md += equipartition.run(q, os.path.join(results_dir, "equipartition"), log)
+
     minutes = (time.time() - started) / 60
     path = os.path.join(out, "results.md")
     if parts >= set(ALL_PARTS) or not os.path.exists(path):
@@ -175,7 +180,7 @@ def main():
     log("wrote %s" % path)
 
 
-ALL_PARTS = ("accuracy", "cost", "sampling", "drift", "gains", "langevin")
+ALL_PARTS = ("accuracy", "cost", "sampling", "drift", "gains", "langevin", "equipartition")
 
 
 def _sections(text):

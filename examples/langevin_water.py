@@ -25,7 +25,7 @@ parser.add_argument('--temperature', type=float, default=300.0, help='K (default
 parser.add_argument('--pressure', type=float, default=1.0, help='bar (default 1)')
 parser.add_argument('--friction', type=float, default=1.0, help='1/ps (default 1)')
 parser.add_argument('--report-interval', type=int, default=100, help='steps between reports (default 100)')
-parser.add_argument('--platform', default='CPU', choices=['CPU', 'Reference', 'OpenCL'])
+parser.add_argument('--platform', default='CPU', choices=mrattle.PLATFORMS)
 parser.add_argument('--output', default='output', help='output folder (default ./output)')
 arguments = parser.parse_args()
 if arguments.steps <= 0 or arguments.report_interval <= 0 or arguments.step_size <= 0:

@@ -275,6 +275,7 @@ TEST_P(Checkpoint, RestartInNewContextIsBitwiseIdentical) {
 }
 
 TEST_P(Checkpoint, ReinitializePreservingStateContinuesTheRun) {
+    SKIP_UNLESS_VERLET(GetParam());
     // Context::reinitialize(true) goes through a checkpoint.
     TestRun uninterrupted(GetParam()), reinitialized(GetParam());
     uninterrupted.integrator->step(StepsBefore + StepsAfter);
@@ -376,8 +377,14 @@ TEST_P(Checkpoint, RefusesCheckpointOfAnotherIntegrator) {
         if (other.platform != GetParam().platform || other.integrator == GetParam().integrator)
             continue;
         TestRun otherRun(other);
+        // On a device platform OpenMM's own part of a Langevin checkpoint holds its device
+        // random state, which a Verlet one lacks: the plugin's part is then not where it
+        // looks, and the refusal says the integrator is another one without naming it.
+        const bool otherLayout = isDevicePlatform(other.platform) && other.isVerlet() != GetParam().isVerlet();
         expectRefusedUntilStateIsSet(run, checkpointOf(*otherRun.context),
-                                     {"Integrate" + other.integrator + "Step", "Integrate" + GetParam().integrator + "Step"});
+                                     otherLayout ? vector<string>{"a different integrator"}
+                                                 : vector<string>{"Integrate" + other.integrator + "Step",
+                                                                  "Integrate" + GetParam().integrator + "Step"});
     }
 }
 
@@ -474,6 +481,7 @@ TEST_P(Checkpoint, SteppingWritesNoCheckpointEvenWithJunkLeftByARefusedOne) {
 }
 
 TEST_P(SavedState, GivesRigidVelocitiesBackBitForBit) {
+    SKIP_UNLESS_VERLET(GetParam());
     TestRun run(GetParam());
     run.integrator->step(StepsBefore);
     State saved = run.context->getState(State::Positions | State::Velocities | State::Parameters);

@@ -81,9 +81,13 @@ TEST_P(Compound, EitherMemberStepsAndSwitchingKeepsBodiesRigid) {
     EXPECT_EQ(120, state.getStepCount());
     EXPECT_GT(maxDeviation(cluster.positions, state.getPositions()), 1e-3);  // it moved
     EXPECT_LT(maxDistanceChange(cluster.positions, state.getPositions(), cluster.molecules), 1e-10);
-    // Both are second-order integrators of the same rigid dynamics: the energy stays put.
+    // Both are second-order integrators of the same rigid dynamics: the energy stays put
+    // (a Langevin member exchanges energy with its bath: rigidity is what is checked then).
+    const bool nve = Config{GetParam().platform, GetParam().first}.isVerlet() &&
+                     Config{GetParam().platform, GetParam().second}.isVerlet();
     for (double energy : energies)
-        EXPECT_NEAR(start, energy, 2e-3 * std::fabs(start) + 0.05) << "after switching";
+        if (nve)
+            EXPECT_NEAR(start, energy, 2e-3 * std::fabs(start) + 0.05) << "after switching";
     // Velocities are rigid: every intra-body distance is constant to first order.
     const vector<Vec3>& x = state.getPositions();
     const vector<Vec3>& v = state.getVelocities();

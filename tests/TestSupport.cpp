@@ -118,7 +118,7 @@ std::vector<Config> configsOf(const std::string& integrator) {
 
 std::vector<Config> allConfigs() {
     std::vector<Config> configs;
-    for (const std::string& integrator : {"MRattle", "RigidSplitting"})
+    for (const std::string& integrator : {"MRattle", "MRattleLangevin", "RigidSplitting"})
         for (const Config& config : configsOf(integrator))
             configs.push_back(config);
     return configs;
@@ -137,9 +137,11 @@ std::unique_ptr<MRattlePlugin::RigidBodyIntegrator> makeIntegrator(const std::st
         return std::unique_ptr<MRattlePlugin::RigidBodyIntegrator>(new MRattlePlugin::MRattleIntegrator(stepSize));
     if (kind == "RigidSplitting")
         return std::unique_ptr<MRattlePlugin::RigidBodyIntegrator>(new MRattlePlugin::RigidSplittingIntegrator(stepSize));
-    if (kind == "MRattleLangevin")  // 300 K, 1/ps
-        return std::unique_ptr<MRattlePlugin::RigidBodyIntegrator>(
-            new MRattlePlugin::MRattleLangevinIntegrator(300.0, 1.0, stepSize));
+    if (kind == "MRattleLangevin") {  // 300 K, 1/ps; a fixed seed: two Contexts draw the same noise
+        auto* langevin = new MRattlePlugin::MRattleLangevinIntegrator(300.0, 1.0, stepSize);
+        langevin->setRandomNumberSeed(2024);
+        return std::unique_ptr<MRattlePlugin::RigidBodyIntegrator>(langevin);
+    }
     throw OpenMMException("makeIntegrator: no integrator kind '" + kind + "'");
 }
 

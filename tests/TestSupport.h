@@ -55,10 +55,20 @@ std::string unavailable(const std::string& name);
     } while (0)
 /** "Reference_MRattle": a test-name suffix. */
 std::string configName(const ::testing::TestParamInfo<Config>& info);
-/** The integrator of that kind. */
+/** The integrator of that kind (MRattleLangevin: 300 K, 1/ps, a fixed random seed). */
 std::unique_ptr<MRattlePlugin::RigidBodyIntegrator> makeIntegrator(const std::string& kind, double stepSize);
 /** Platform properties of the tests: one thread on CPU (several sum forces in varying order), double precision on OpenCL. */
 std::map<std::string, std::string> platformProperties(const std::string& platform);
+
+/**
+ * Skip a generic test that checks what only velocity Verlet has (energy conservation, a
+ * temperature that stays as set, a run that continues bit for bit without the random
+ * stream), saying why.
+ */
+#define SKIP_UNLESS_VERLET(config)                                                                    \
+    if (!(config).isVerlet())                                                                         \
+        GTEST_SKIP() << (config).integrator << " is a thermostat (Langevin): this test checks a property " \
+                        "of velocity Verlet (NVE energy, on-step velocities, no random stream)";
 
 /** The fixture of the generic suites. */
 class RigidBodyTest : public ::testing::TestWithParam<Config> {

@@ -1,4 +1,5 @@
 #include "TorqueCondition.h"
+#include "mrattle/RigidBodyMath.h"
 #include <cmath>
 
 namespace MRattlePlugin {
@@ -121,11 +122,11 @@ MRATTLE_INLINE void solveLanes(const typename L::Real* j, const typename L::Real
         const Real size = L::squareRoot(w0 * w0 + w1 * w1 + w2 * w2);
         active = active & L::finite(size);   // a lane whose w is not finite has failed
         // The error left is about the step times the rate at which steps shrink.
-        const Mask done = active & (stepSize * stepSize <= 1e-15 * size * previousStep);
+        const Mask done = active & (stepSize * stepSize <= RigidBodyMath::ChordConvergence * size * previousStep);
         converged = converged | done;
         iterations = L::select(done, Real{} + (iteration + 1), iterations);
         active = L::andNot(active, done);
-        newJacobian = L::negate(stepSize <= 1e-3 * size);
+        newJacobian = L::negate(stepSize <= RigidBodyMath::ChordSwitch * size);
         previousStep = L::select(active, stepSize, previousStep);
     }
     w[0] = w0;

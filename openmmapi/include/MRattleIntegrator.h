@@ -26,6 +26,7 @@ public:
     explicit MRattleIntegrator(double stepSize);
 protected:
     std::string getStepKernelName() const override;
+    void executeStep(OpenMM::Kernel& kernel, OpenMM::ContextImpl& context, bool& forcesAreValid) override;
 };
 
 } // namespace MRattlePlugin

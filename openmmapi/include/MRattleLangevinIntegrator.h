@@ -66,6 +66,7 @@ public:
 
 protected:
     std::string getStepKernelName() const override;
+    void executeStep(OpenMM::Kernel& kernel, OpenMM::ContextImpl& context, bool& forcesAreValid) override;
 
 private:
     double temperature, friction;

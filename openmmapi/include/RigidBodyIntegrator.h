@@ -57,6 +57,36 @@ public:
      * particle minus constraints: use mrattle.StateDataReporter there).
      */
     double computeSystemTemperature();
+    /**
+     * The kinetic energy of the bodies' centre-of-mass motion, sum M V^2 / 2 (kJ/mol), from
+     * the Context's velocities: those the integrator keeps, so for MRattleLangevinIntegrator
+     * those of the middle of the last step, half a step behind the positions, as its kinetic
+     * energy (the same convention as LangevinMiddleIntegrator's). Computed by the kernel on
+     * every platform. The translational, rotational and free kinetic energies add up to the
+     * State's kinetic energy to round-off.
+     */
+    double computeTranslationalKineticEnergy();
+    /** The kinetic energy of the bodies' rotation about their centres of mass, sum over bodies of m |v - V|^2 / 2 (kJ/mol). */
+    double computeRotationalKineticEnergy();
+    /** The kinetic energy of the free particles (massive particles in no body), sum m v^2 / 2 (kJ/mol). */
+    double computeFreeKineticEnergy();
+    /**
+     * Translational degrees of freedom of the bodies: 3 each, minus their share of a
+     * CMMotionRemover's 3, the bodies' fraction of the mass of bodies and free particles
+     * (so all 3 when every massive particle is in a body; not an integer in general). The
+     * translational, rotational and free degrees of freedom add up to getNumDegreesOfFreedom().
+     */
+    double getTranslationalDegreesOfFreedom() const;
+    /** Rotational degrees of freedom of the bodies: 3 each, 2 for a linear body, 0 for one whose atoms coincide (at the last positions set). */
+    int getRotationalDegreesOfFreedom() const;
+    /** Degrees of freedom of the free particles: 3 each, minus constraints among them, minus their mass share of a CMMotionRemover's 3. */
+    double getFreeDegreesOfFreedom() const;
+    /** 2 computeTranslationalKineticEnergy() / (getTranslationalDegreesOfFreedom() k_B), in Kelvin (0 without such degrees of freedom). */
+    double computeTranslationalTemperature();
+    /** 2 computeRotationalKineticEnergy() / (getRotationalDegreesOfFreedom() k_B), in Kelvin (0 without such degrees of freedom). */
+    double computeRotationalTemperature();
+    /** 2 computeFreeKineticEnergy() / (getFreeDegreesOfFreedom() k_B), in Kelvin (0 without such degrees of freedom). */
+    double computeFreeTemperature();
     /** The body topology in effect (throws if not bound). */
     const RigidBodyTopology& getTopology() const;
     /**
@@ -78,6 +108,8 @@ protected:
     RigidBodyIntegrator();
     /** The kernel's name; the kernel must derive from RigidBodyKernel. */
     virtual std::string getStepKernelName() const = 0;
+    /** One step by the kernel, through its own interface (whose execute() takes this integrator's class). */
+    virtual void executeStep(OpenMM::Kernel& kernel, OpenMM::ContextImpl& context, bool& forcesAreValid) = 0;
 
     void initialize(OpenMM::ContextImpl& context) override;
     void cleanup() override;
@@ -107,6 +139,8 @@ protected:
 private:
     /** Throw unless bound to a Context. */
     void requireContext() const;
+    /** The kernel's translational, rotational and free kinetic energies (index 0, 1, 2). */
+    double kineticEnergyPart(int part);
     /** Whether this integrator is the one that steps the Context (it may be a member of a CompoundIntegrator). */
     bool isCurrentIntegrator() const;
     mutable OpenMM::Kernel kernel;

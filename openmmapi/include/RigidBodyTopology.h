@@ -63,6 +63,19 @@ public:
      */
     int getNumDegreesOfFreedom(int bodyDegreesOfFreedom) const;
     /**
+     * getNumDegreesOfFreedom() split between the bodies' translations, their rotations and the
+     * free particles (the three add up to it). Translational: 3 per body. Rotational: the rest
+     * of the bodies' degrees of freedom (3 per body, 2 if linear, 0 if its atoms coincide).
+     * Free: 3 per free particle minus free constraints. A CMMotionRemover's 3 are taken from
+     * the translational and the free ones in proportion to their mass (the bodies' total mass
+     * and the free particles' over the sum of the two): at equipartition with zero total
+     * momentum that is the share of the kinetic energy each loses, so each part's temperature
+     * is then the bath's. Rotations lose none (a body's rotation is about its own centre).
+     */
+    double getTranslationalDegreesOfFreedom() const;
+    int getRotationalDegreesOfFreedom(int bodyDegreesOfFreedom) const;
+    double getFreeDegreesOfFreedom() const;
+    /**
      * A hash of the partition of particles into bodies, the same whatever order the bodies
      * or their members were listed in: checkpoints carry it so that one written with other
      * bodies is refused.
@@ -72,6 +85,8 @@ public:
     const std::vector<double>& getMasses() const { return masses; }
 
 private:
+    /** The part of a CMMotionRemover's 3 degrees of freedom taken from the free particles: their share of the mass. */
+    double removedFromFree() const;
     std::vector<std::vector<int> > bodies;
     std::vector<int> bodyOfParticle;
     std::vector<int> freeParticles;

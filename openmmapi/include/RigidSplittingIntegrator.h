@@ -30,6 +30,7 @@ public:
     explicit RigidSplittingIntegrator(double stepSize);
 protected:
     std::string getStepKernelName() const override;
+    void executeStep(OpenMM::Kernel& kernel, OpenMM::ContextImpl& context, bool& forcesAreValid) override;
 };
 
 } // namespace MRattlePlugin

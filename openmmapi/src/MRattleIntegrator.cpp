@@ -12,3 +12,7 @@ MRattleIntegrator::MRattleIntegrator(double stepSize) {
 std::string MRattleIntegrator::getStepKernelName() const {
     return IntegrateMRattleStepKernel::Name();
 }
+
+void MRattleIntegrator::executeStep(Kernel& kernel, ContextImpl& context, bool& forcesAreValid) {
+    kernel.getAs<IntegrateMRattleStepKernel>().execute(context, *this, forcesAreValid);
+}

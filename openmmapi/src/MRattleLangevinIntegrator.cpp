@@ -30,3 +30,7 @@ void MRattleLangevinIntegrator::setFriction(double coeff) {
 std::string MRattleLangevinIntegrator::getStepKernelName() const {
     return IntegrateMRattleLangevinStepKernel::Name();
 }
+
+void MRattleLangevinIntegrator::executeStep(Kernel& kernel, ContextImpl& context, bool& forcesAreValid) {
+    kernel.getAs<IntegrateMRattleLangevinStepKernel>().execute(context, *this, forcesAreValid);
+}

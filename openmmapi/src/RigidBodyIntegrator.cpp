@@ -13,6 +13,13 @@ using namespace MRattlePlugin;
 using namespace OpenMM;
 using std::vector;
 
+namespace {
+/** 2 KE / (dof k_B); 0 without degrees of freedom. */
+double temperatureOf(double kineticEnergy, double dof) {
+    return dof > 0 ? 2 * kineticEnergy / (dof * BOLTZ) : 0.0;
+}
+} // namespace
+
 RigidBodyIntegrator::RigidBodyIntegrator() {
     setConstraintTolerance(1e-5);
 }
@@ -96,10 +103,51 @@ int RigidBodyIntegrator::getNumDegreesOfFreedom() const {
 
 double RigidBodyIntegrator::computeSystemTemperature() {
     requireContext();
-    const int dof = getNumDegreesOfFreedom();
-    if (dof <= 0)
-        return 0.0;
-    return 2 * computeKineticEnergy() / (dof * BOLTZ);
+    return temperatureOf(computeKineticEnergy(), getNumDegreesOfFreedom());
+}
+
+double RigidBodyIntegrator::kineticEnergyPart(int part) {
+    requireContext();
+    double energies[3];
+    kernel.getAs<RigidBodyKernel>().computeKineticEnergies(*context, energies[0], energies[1], energies[2]);
+    return energies[part];
+}
+
+double RigidBodyIntegrator::computeTranslationalKineticEnergy() {
+    return kineticEnergyPart(0);
+}
+
+double RigidBodyIntegrator::computeRotationalKineticEnergy() {
+    return kineticEnergyPart(1);
+}
+
+double RigidBodyIntegrator::computeFreeKineticEnergy() {
+    return kineticEnergyPart(2);
+}
+
+double RigidBodyIntegrator::getTranslationalDegreesOfFreedom() const {
+    return getTopology().getTranslationalDegreesOfFreedom();
+}
+
+int RigidBodyIntegrator::getRotationalDegreesOfFreedom() const {
+    return getTopology().getRotationalDegreesOfFreedom(kernel.getAs<const RigidBodyKernel>().getBodyDegreesOfFreedom());
+}
+
+double RigidBodyIntegrator::getFreeDegreesOfFreedom() const {
+    return getTopology().getFreeDegreesOfFreedom();
+}
+
+
+double RigidBodyIntegrator::computeTranslationalTemperature() {
+    return temperatureOf(computeTranslationalKineticEnergy(), getTranslationalDegreesOfFreedom());
+}
+
+double RigidBodyIntegrator::computeRotationalTemperature() {
+    return temperatureOf(computeRotationalKineticEnergy(), getRotationalDegreesOfFreedom());
+}
+
+double RigidBodyIntegrator::computeFreeTemperature() {
+    return temperatureOf(computeFreeKineticEnergy(), getFreeDegreesOfFreedom());
 }
 
 void RigidBodyIntegrator::initialize(ContextImpl& contextRef) {
@@ -263,7 +311,7 @@ void RigidBodyIntegrator::step(int steps) {
         // A getState() may have overwritten the forces with other force groups.
         if (context->getLastForceGroups() != getIntegrationForceGroups())
             forcesAreValid = false;
-        stepKernel.execute(*context, *this, forcesAreValid);
+        executeStep(kernel, *context, forcesAreValid);
         lastStepCount = context->getStepCount();
     }
 }

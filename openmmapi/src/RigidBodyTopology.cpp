@@ -163,6 +163,29 @@ RigidBodyTopology::RigidBodyTopology(const System& system, const vector<vector<i
     }
 }
 
+double RigidBodyTopology::getTranslationalDegreesOfFreedom() const {
+    return 3.0 * getNumBodies() - (hasCMMotionRemover ? 3.0 - removedFromFree() : 0.0);
+}
+
+int RigidBodyTopology::getRotationalDegreesOfFreedom(int bodyDegreesOfFreedom) const {
+    return bodyDegreesOfFreedom - 3 * getNumBodies();
+}
+
+double RigidBodyTopology::getFreeDegreesOfFreedom() const {
+    const double unconstrained = 3.0 * freeParticles.size() - (double) freeConstraints.size();
+    return unconstrained - (hasCMMotionRemover ? removedFromFree() : 0.0);
+}
+
+double RigidBodyTopology::removedFromFree() const {
+    double bodies = 0, free = 0;
+    for (double mass : bodyMass)
+        bodies += mass;
+    for (int i : freeParticles)
+        free += masses[i];
+    // With no massive particle at all, the 3 come off the free ones, as getNumDegreesOfFreedom() takes them.
+    return bodies + free > 0 ? 3 * free / (bodies + free) : 3.0;
+}
+
 int RigidBodyTopology::getNumDegreesOfFreedom(int bodyDegreesOfFreedom) const {
     int dof = 3 * (int) freeParticles.size() - (int) freeConstraints.size() + bodyDegreesOfFreedom;
     if (hasCMMotionRemover)

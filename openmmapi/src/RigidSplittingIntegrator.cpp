@@ -12,3 +12,7 @@ RigidSplittingIntegrator::RigidSplittingIntegrator(double stepSize) {
 std::string RigidSplittingIntegrator::getStepKernelName() const {
     return IntegrateRigidSplittingStepKernel::Name();
 }
+
+void RigidSplittingIntegrator::executeStep(Kernel& kernel, ContextImpl& context, bool& forcesAreValid) {
+    kernel.getAs<IntegrateRigidSplittingStepKernel>().execute(context, *this, forcesAreValid);
+}

@@ -40,18 +40,63 @@ def kineticTemperature(simulationOrContext, state=None):
 
 
 class StateDataReporter(app.StateDataReporter):
-    """openmm.app.StateDataReporter whose temperature uses the rigid-body degrees of freedom.
+    """openmm.app.StateDataReporter whose temperature uses the rigid-body degrees of freedom,
+    with columns for the rigid bodies' translational and rotational temperatures.
 
     OpenMM's reporter counts 3 degrees of freedom per particle minus constraints, which is
     wrong for rigid bodies (a rigid benzene has 6, not 36 - 0). With a RigidBodyIntegrator
     (such as MRattleIntegrator) this reporter asks the integrator instead; with any other
-    integrator it behaves exactly like OpenMM's. It takes the same arguments.
+    integrator it behaves exactly like OpenMM's. It takes the same arguments, and:
+
+    translationalTemperature : bool=False
+        write the bodies' translational temperature (RigidBodyIntegrator.computeTranslationalTemperature())
+    rotationalTemperature : bool=False
+        write the bodies' rotational temperature (RigidBodyIntegrator.computeRotationalTemperature())
+
+    The two columns follow the Temperature column (or where it would be). They need a
+    RigidBodyIntegrator; with MRattleLangevinIntegrator they use its half-step velocities, as
+    its kinetic energy does.
     """
+
+    def __init__(self, file, reportInterval, *args, translationalTemperature=False, rotationalTemperature=False,
+                 **kwargs):
+        super().__init__(file, reportInterval, *args, **kwargs)
+        self._bodyColumns = [(name, method) for flag, name, method in (
+            (translationalTemperature, 'Translational Temperature (K)', 'computeTranslationalTemperature'),
+            (rotationalTemperature, 'Rotational Temperature (K)', 'computeRotationalTemperature')) if flag]
 
     def _initializeConstants(self, simulation):
         super()._initializeConstants(simulation)
-        if self._temperature and isinstance(simulation.integrator, RigidBodyIntegrator):
+        rigid = isinstance(simulation.integrator, RigidBodyIntegrator)
+        if self._temperature and rigid:
             self._dof = simulation.integrator.getNumDegreesOfFreedom()
+        if self._bodyColumns and not rigid:
+            raise ValueError('StateDataReporter: the translationalTemperature and rotationalTemperature columns need a '
+                             'RigidBodyIntegrator (such as mrattle.MRattleIntegrator); the Simulation has a %s'
+                             % type(simulation.integrator).__name__)
+        self._bodyIntegrator = simulation.integrator
+
+    def _bodyColumnIndex(self, headers):
+        """Where the new columns go: after Temperature, or after the energies before it."""
+        if 'Temperature (K)' in headers:
+            return headers.index('Temperature (K)') + 1
+        before = ('Progress (%)', 'Step', 'Time (ps)', 'Potential Energy (kJ/mole)', 'Kinetic Energy (kJ/mole)',
+                  'Total Energy (kJ/mole)')
+        return sum(1 for header in headers if header in before)
+
+    def _constructHeaders(self):
+        headers = super()._constructHeaders()
+        self._bodyIndex = self._bodyColumnIndex(headers)
+        index = self._bodyIndex
+        return headers[:index] + [name for name, _ in self._bodyColumns] + headers[index:]
+
+    def _constructReportValues(self, simulation, state):
+        values = super()._constructReportValues(simulation, state)
+        if not self._bodyColumns:
+            return values
+        index = self._bodyIndex
+        extra = [getattr(self._bodyIntegrator, method)().value_in_unit(unit.kelvin) for _, method in self._bodyColumns]
+        return values[:index] + extra + values[index:]
 
 
 class ProgressReporter(object):

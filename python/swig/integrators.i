@@ -129,6 +129,18 @@ static PyObject* intListToPython(const std::vector<int>& values) {
 %feature("pythonappend") MRattlePlugin::RigidBodyIntegrator::computeSystemTemperature %{
     val = val*unit.kelvin
 %}
+/* The kinetic-energy split (kernels on every platform): energies in kJ/mol, temperatures in K. */
+%define MRATTLE_UNITS(METHOD, UNIT)
+%feature("pythonappend") MRattlePlugin::RigidBodyIntegrator::METHOD %{
+    val = val*UNIT
+%}
+%enddef
+MRATTLE_UNITS(computeTranslationalKineticEnergy, unit.kilojoules_per_mole)
+MRATTLE_UNITS(computeRotationalKineticEnergy, unit.kilojoules_per_mole)
+MRATTLE_UNITS(computeFreeKineticEnergy, unit.kilojoules_per_mole)
+MRATTLE_UNITS(computeTranslationalTemperature, unit.kelvin)
+MRATTLE_UNITS(computeRotationalTemperature, unit.kelvin)
+MRATTLE_UNITS(computeFreeTemperature, unit.kelvin)
 %include "RigidBodyIntegrator.h"
 
 /*

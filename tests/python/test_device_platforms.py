@@ -2,6 +2,7 @@
 with reporters, in each precision. Skipped where no device platform has the plugin's kernels
 (pocl gives an OpenCL platform on a CPU)."""
 import io
+import os
 
 import numpy as np
 import openmm
@@ -41,3 +42,110 @@ def test_splitting_integrator_is_refused_on_the_device_with_its_platforms(device
     model = mrattle.models.benzene()
     with pytest.raises(openmm.OpenMMException, match='Reference and CPU platforms only'):
         openmm.Context(model.system, mrattle.RigidSplittingIntegrator(0.002), devicePlatform)
+
+
+DATA = os.path.join(os.path.dirname(app.__file__), 'data')
+
+#: OpenMM's own inputs: (PDB file, force field files, what is rigid, which integrator).
+REAL_INPUTS = [
+    ('tip3p.pdb', ['amber14/tip3p.xml'], 'MRattle'),
+    ('tip4pew.pdb', ['amber14/tip4pew.xml'], 'MRattleLangevin'),
+    ('test.pdb', ['amber14-all.xml', 'amber14/tip3p.xml'], 'MRattle'),  # rigid waters, flexible villin
+]
+
+
+def makeIntegrator(kind, stepSize):
+    if kind == 'MRattle':
+        return mrattle.MRattleIntegrator(stepSize)
+    integrator = mrattle.MRattleLangevinIntegrator(300*unit.kelvin, 1/unit.picosecond, stepSize)
+    integrator.setRandomNumberSeed(7)
+    return integrator
+
+
+@pytest.mark.parametrize('precision', ['single', 'mixed', 'double'])
+@pytest.mark.parametrize('pdbName,forceFields,kind', REAL_INPUTS, ids=[entry[0] for entry in REAL_INPUTS])
+def test_real_inputs_in_every_precision(devicePlatform, precision, pdbName, forceFields, kind):
+    """Setting a PDB file's positions corrects each water onto its geometry once, never
+    re-entering itself (it recursed until the stack overflowed in single and mixed
+    precision), and positions read back and set again are left bit for bit."""
+    pdb = app.PDBFile(os.path.join(DATA, pdbName))
+    modeller = app.Modeller(pdb.topology, pdb.positions)
+    forcefield = app.ForceField(*forceFields)
+    if pdbName == 'tip4pew.pdb':
+        modeller.addExtraParticles(forcefield)
+    system = forcefield.createSystem(modeller.topology, nonbondedMethod=app.PME, nonbondedCutoff=0.9*unit.nanometers,
+                                     constraints=app.HBonds, rigidWater=True)
+    integrator = makeIntegrator(kind, 2*unit.femtoseconds)
+    waters = [[atom.index for atom in residue.atoms() if atom.element is not None]
+              for residue in modeller.topology.residues() if residue.name == 'HOH']
+    if pdbName == 'test.pdb':
+        for water in waters:  # the protein stays flexible, its bonds to hydrogen constrained
+            integrator.addRigidBody(water)
+    context = openmm.Context(system, integrator, devicePlatform, {'Precision': precision})
+    context.setPositions(modeller.positions)
+    stored = context.getState(getPositions=True).getPositions(asNumpy=True).value_in_unit(unit.nanometers)
+    context.setPositions(stored)
+    again = context.getState(getPositions=True).getPositions(asNumpy=True).value_in_unit(unit.nanometers)
+    assert np.array_equal(stored, again), 'a second setPositions moved atoms by %g nm' % np.abs(again - stored).max()
+    # The waters have their force field's geometry (to the precision's storage).
+    # (PDB files' waters are off by ~1e-3 nm; single and mixed storage round a 3 nm box's to ~2e-6 nm.)
+    tolerance = {'single': 1e-5, 'mixed': 1e-5, 'double': 1e-9}[precision]
+    oh = system.getConstraintParameters(0)[2] if pdbName != 'test.pdb' else None
+    for water in waters[:50]:
+        d = [np.linalg.norm(again[water[0]] - again[water[k]]) for k in (1, 2)]
+        assert abs(d[0] - d[1]) < tolerance
+        if oh is not None:
+            assert abs(d[0] - oh.value_in_unit(unit.nanometers)) < tolerance
+    context.setVelocitiesToTemperature(300*unit.kelvin, 3)
+    integrator.step(5)
+    state = context.getState(getPositions=True, getEnergy=True)
+    assert state.getStepCount() == 5
+    assert np.isfinite(state.getPotentialEnergy().value_in_unit(unit.kilojoules_per_mole))
+
+
+def totalEnergies(context, integrator, samples, every):
+    energies = []
+    for _ in range(samples):
+        integrator.step(every)
+        state = context.getState(getEnergy=True)
+        energies.append((state.getKineticEnergy() + state.getPotentialEnergy()).value_in_unit(unit.kilojoules_per_mole))
+    return np.array(energies)
+
+
+def test_nve_energy_has_no_jumps_past_reorderings(devicePlatform):
+    """OpenMM reorders atoms about every 250 steps of a periodic system: the next step must
+    kick with the forces of the atoms' new order (it used those of the old one, and the
+    energy jumped by tens of kJ/mol at each reordering). Judged against OpenMM's own
+    VerletIntegrator with SETTLE on the same box, platform and precision, with energies read
+    every 50 steps only (an energy read recomputes the forces and hid the fault)."""
+    model = mrattle.models.waterBox(numMolecules=216, cutoff=0.9*unit.nanometers)
+    jumps = {}
+    for name, integrator in [('M-RATTLE', mrattle.MRattleIntegrator(1*unit.femtoseconds)),
+                             ('Verlet+SETTLE', openmm.VerletIntegrator(1*unit.femtoseconds))]:
+        context = openmm.Context(model.system, integrator, devicePlatform, {'Precision': 'mixed'})
+        context.setPositions(model.positions)
+        context.setVelocitiesToTemperature(300*unit.kelvin, 1)
+        integrator.step(50)
+        energies = totalEnergies(context, integrator, 22, 50)  # 1100 steps: four reorderings
+        jumps[name] = np.abs(np.diff(energies)).max()
+    assert jumps['M-RATTLE'] < 3*jumps['Verlet+SETTLE'] + 1.0, jumps
+
+
+def test_langevin_temperature_past_reorderings(devicePlatform):
+    """The bath's temperature, within its error bar, over a run with four reorderings (the
+    stale forces after each one heated a 300 K water box to 349 +- 3 K). Block averages of
+    the rigid-body kinetic temperature; the error bar is the blocks' standard error."""
+    model = mrattle.models.waterBox(numMolecules=216, cutoff=0.9*unit.nanometers)
+    integrator = mrattle.MRattleLangevinIntegrator(300*unit.kelvin, 5/unit.picosecond, 1*unit.femtoseconds)
+    integrator.setRandomNumberSeed(11)
+    context = openmm.Context(model.system, integrator, devicePlatform, {'Precision': 'mixed'})
+    context.setPositions(model.positions)
+    context.setVelocitiesToTemperature(300*unit.kelvin, 2)
+    integrator.step(200)
+    temperatures = []
+    for _ in range(100):  # 1000 steps
+        integrator.step(10)
+        temperatures.append(integrator.computeSystemTemperature().value_in_unit(unit.kelvin))
+    blocks = np.array(temperatures).reshape(10, 10).mean(axis=1)
+    mean, error = blocks.mean(), blocks.std(ddof=1)/np.sqrt(len(blocks))
+    assert abs(mean - 300) < 4*error + 2, (mean, error)

@@ -4,6 +4,7 @@ import os
 import subprocess
 import sys
 
+import numpy as np
 import pytest
 
 EXAMPLES = os.path.join(os.path.dirname(os.path.abspath(__file__)), '..', '..', 'examples')
@@ -80,3 +81,30 @@ def test_solvated_protein(tmp_path):
     assert '2761 rigid waters' in result.stdout
     line = [l for l in result.stdout.splitlines() if l.startswith('temperature')][0]
     assert float(line.split('constraint error')[1].split()[0]) < 1e-5
+
+
+#: Each example that takes --platform, with arguments for a few steps.
+DEVICE_RUNS = [
+    ('benzene_cluster.py', ['--steps', '10', '--report-interval', '5'], True),
+    ('water_box.py', ['--steps', '4', '--equilibration', '2'], True),
+    ('liquid_benzene.py', ['--molecules', '27', '--cutoff', '0.7', '--steps', '4'], True),
+    ('langevin_water.py', ['--steps', '10', '--report-interval', '5'], True),
+    ('solvated_protein.py', ['--steps', '4'], False),
+]
+
+
+@pytest.mark.parametrize('name,arguments,output', DEVICE_RUNS, ids=[run[0] for run in DEVICE_RUNS])
+def test_examples_run_on_the_device(tmp_path, devicePlatform, name, arguments, output):
+    """OpenMM's real inputs (tip3p.pdb, test.pdb) in the device's default precision, as a new user runs them."""
+    runExample(name, tmp_path, *(arguments + ['--platform', devicePlatform.getName()]), output=output)
+
+
+def test_rigid_ring(tmp_path):
+    result = runExample('rigid_ring.py', tmp_path, '--steps', '40', '--platform', 'CPU', output=False)
+    assert '4 phenylalanine rings of 11 atoms made rigid' in result.stdout
+    rows = {line[:34].strip(): line[34:].split() for line in result.stdout.splitlines()
+            if line.startswith(('flexible', 'rigid rings'))}
+    assert sorted(rows) == ['flexible (VerletIntegrator)', 'rigid rings (MRattleIntegrator)']
+    for values in rows.values():
+        assert all(np.isfinite(float(v)) for v in values[:4])
+    assert rows['rigid rings (MRattleIntegrator)'][4] != '-'  # the rings' translational / rotational temperatures

@@ -179,3 +179,92 @@ def test_a_protein_made_rigid_by_default_is_warned_about_once():
     mrattle.declareRigidBodies(declared, pdb.topology, system, 'water')
     openmm.Context(system, declared, openmm.Platform.getPlatformByName('Reference'))
     assert declared.getLargeDefaultBodies() == []
+
+
+# A phenylalanine side chain's ring with its hydrogens (amber14's atom names).
+PHE_RING = ['CG', 'CD1', 'HD1', 'CD2', 'HD2', 'CE1', 'HE1', 'CE2', 'HE2', 'CZ', 'HZ']
+
+
+def villinInVacuum():
+    """OpenMM's villin headpiece (test.pdb) without its water and ions, amber14, no cutoff, H-bond constraints."""
+    pdb = app.PDBFile(os.path.join(DATA, 'test.pdb'))
+    modeller = app.Modeller(pdb.topology, pdb.positions)
+    modeller.delete([residue for residue in modeller.topology.residues() if residue.name in ('HOH', 'Cl', 'Na')])
+    system = app.ForceField('amber14-all.xml').createSystem(modeller.topology, constraints=app.HBonds)
+    return modeller.topology, modeller.positions, system
+
+
+def stepAndCheckRigid(topology, positions, system, bodies, steps=20):
+    integrator = mrattle.MRattleIntegrator(1*unit.femtoseconds)
+    for body in bodies:
+        integrator.addRigidBody(body)
+    context = openmm.Context(system, integrator, openmm.Platform.getPlatformByName('Reference'))
+    context.setPositions(positions)
+    context.setVelocitiesToTemperature(300*unit.kelvin, 3)
+    before = context.getState(getPositions=True).getPositions(asNumpy=True).value_in_unit(unit.nanometers)
+    integrator.step(steps)
+    after = context.getState(getPositions=True).getPositions(asNumpy=True).value_in_unit(unit.nanometers)
+    for body in bodies:
+        d0 = np.linalg.norm(before[body][:, None] - before[body][None], axis=2)
+        d1 = np.linalg.norm(after[body][:, None] - after[body][None], axis=2)
+        assert np.max(np.abs(d1 - d0)) < 1e-10
+    return integrator, context, before, after
+
+
+def test_atom_names_per_residue_make_rigid_rings_in_a_flexible_protein():
+    topology, positions, system = villinInVacuum()
+    bodies = mrattle.rigidBodies(topology, system, {'PHE': PHE_RING})
+    assert len(bodies) == 4
+    atoms = list(topology.atoms())
+    for body in bodies:
+        assert [atoms[i].name for i in body] == PHE_RING or sorted(atoms[i].name for i in body) == sorted(PHE_RING)
+        assert len({atoms[i].residue.index for i in body}) == 1
+    # The same bodies by a residue selection and atom names, or a function of atoms.
+    assert mrattle.rigidBodies(topology, system, 'PHE', atoms=PHE_RING) == bodies
+    assert mrattle.rigidBodies(topology, system, 'PHE', atoms=lambda atom: atom.name in PHE_RING) == bodies
+    integrator, context, before, after = stepAndCheckRigid(topology, positions, system, bodies)
+    # The rest of the protein is flexible: a CB-CG bond next to a ring changes length.
+    ring = bodies[0]
+    cb = [a.index for a in atoms if a.residue.index == atoms[ring[0]].residue.index and a.name == 'CB'][0]
+    cg = [i for i in ring if atoms[i].name == 'CG'][0]
+    assert abs(np.linalg.norm(after[cb] - after[cg]) - np.linalg.norm(before[cb] - before[cg])) > 1e-6
+    # 6 per ring, 3 per other atom less the H-bond constraints not inside a ring, minus the CMMotionRemover's 3.
+    inRing = {i for body in bodies for i in body}
+    outside = [c for c in range(system.getNumConstraints())
+               if not set(system.getConstraintParameters(c)[:2]) <= inRing]
+    assert integrator.getNumDegreesOfFreedom() == 6*4 + 3*(system.getNumParticles() - len(inRing)) - len(outside) - 3
+
+
+def test_a_domain_spanning_residues_is_one_body():
+    topology, positions, system = villinInVacuum()
+    domain = mrattle.rigidBodies(topology, system, lambda residue: 4 <= residue.index < 14, group='chain')
+    assert len(domain) == 1
+    residues = list(topology.residues())
+    expected = sorted(atom.index for residue in residues[4:14] for atom in residue.atoms())
+    assert domain[0] == expected
+    assert len(mrattle.rigidBodies(topology, system, lambda residue: 4 <= residue.index < 14)) == 10
+    stepAndCheckRigid(topology, positions, system, domain, steps=10)
+
+
+def test_a_body_cut_through_a_constraint_is_refused_naming_the_particle():
+    topology, positions, system = villinInVacuum()
+    carbons = mrattle.rigidBodies(topology, system, {'PHE': ['CG', 'CD1', 'CD2', 'CE1', 'CE2', 'CZ']})
+    integrator = mrattle.MRattleIntegrator(1*unit.femtoseconds)
+    for body in carbons:
+        integrator.addRigidBody(body)
+    with pytest.raises(openmm.OpenMMException, match=r'joins particle \d+ of rigid body 0 to particle \d+ outside'):
+        openmm.Context(system, integrator, openmm.Platform.getPlatformByName('Reference'))
+
+
+def test_atom_selection_errors():
+    topology, positions, system = villinInVacuum()
+    with pytest.raises(ValueError, match='PHE .* has no atom named XX'):
+        mrattle.rigidBodies(topology, system, {'PHE': ['CG', 'XX']})
+    with pytest.raises(ValueError, match='either in the dict'):
+        mrattle.rigidBodies(topology, system, {'PHE': PHE_RING}, atoms=['CG'])
+    with pytest.raises(ValueError, match='non-empty list'):
+        mrattle.rigidBodies(topology, system, {'PHE': 'CG'})
+    with pytest.raises(ValueError, match='group must be one of'):
+        mrattle.rigidBodies(topology, system, 'PHE', group='domain')
+    with pytest.raises(ValueError, match='no residue or atom'):
+        mrattle.rigidBodies(topology, system, 'PHE', atoms=lambda atom: False)

@@ -34,6 +34,18 @@ struct RotationSolve {
 
 /** Newton iterations allowed before the solve is reported as not converged. */
 constexpr int MaxRotationIterations = 50;
+/**
+ * The rotation solve has converged when its error estimate, step^2 / previous step, is
+ * below this fraction of the rotation (double precision's round-off)...
+ */
+constexpr double ChordConvergence = 1e-15;
+/** ...and keeps its Jacobian (chord steps) once a correction is below this fraction of the rotation. */
+constexpr double ChordSwitch = 1e-3;
+/**
+ * Velocities of a body differing from their rigid projection by more than this fraction of
+ * its largest rigid velocity have collided (an AndersenThermostat re-drew some of its atoms).
+ */
+constexpr double CollisionThreshold = 1e-8;
 
 /** Mass-weighted centre of the body's atoms. */
 Eigen::Vector3d centerOfMass(const BodyView& body, const double* positions);

@@ -17,14 +17,17 @@ class ContextImpl;
 namespace MRattlePlugin {
 
 class RigidBodyIntegrator;
+class MRattleIntegrator;
+class MRattleLangevinIntegrator;
+class RigidSplittingIntegrator;
 
 /**
  * What every rigid-body integrator needs from its platform. The kernel owns the step and
  * all per-particle and per-body work (the API class does O(1) work per step); it keeps its
  * own copy of the body topology and the state that depends on the configuration (which
  * bodies are linear) or on the run (random streams), and writes that state into
- * checkpoints. Each integrator has its own kernel name (a subclass below) so that a
- * platform can implement each one.
+ * checkpoints. Each integrator has its own kernel (a subclass below, with its own name and
+ * an execute() that takes that integrator), so that a platform can implement each one.
  */
 class OPENMM_EXPORT_MRATTLE RigidBodyKernel : public OpenMM::KernelImpl {
 public:
@@ -37,18 +40,18 @@ public:
      */
     virtual void initialize(const OpenMM::System& system, const RigidBodyTopology& topology,
                             const RigidBodyIntegrator& integrator) = 0;
-    /**
-     * One step: with an AndersenThermostat in the System, bodies with a collided atom first
-     * get fresh thermal velocities as a whole; then the forces (unless forcesAreValid), the
+    /*
+     * The step contract of each subclass's execute(): with an AndersenThermostat in the
+     * System, bodies with a collided atom first get fresh thermal velocities as a whole; then the forces (unless forcesAreValid), the
      * first half (half kick, drift, the integrator's position update, free-particle
      * constraints, virtual sites), the forces at the new positions and the second half
      * (half kick, rigid-body velocity projection). Advances time and step count. A step
-     * that fails throws an OpenMMException and leaves positions and velocities as they were.
+     * that fails throws an OpenMMException, found before the step count moves, and leaves
+     * positions, velocities, time and step count as they were.
      *
-     * @param forcesAreValid  in: the Context's forces are those at the current positions
-     *                        for the integration force groups; out: true after a step
+     * forcesAreValid -- in: the Context's forces are those at the current positions for the
+     * integration force groups; out: true after a step.
      */
-    virtual void execute(OpenMM::ContextImpl& context, const RigidBodyIntegrator& integrator, bool& forcesAreValid) = 0;
     /**
      * The Context's positions were set: classify the bodies' shapes (linear or not) from
      * them. Throws an OpenMMException naming a particle whose position is not finite.
@@ -71,6 +74,15 @@ public:
                                                                   int randomSeed, double tolerance) = 0;
     /** Sum of m v^2 / 2 over the Context's velocities. */
     virtual double computeKineticEnergy(OpenMM::ContextImpl& context) = 0;
+    /**
+     * computeKineticEnergy() split three ways, from the same velocities: translational, the
+     * sum of M V^2 / 2 over the bodies (M a body's mass, V its centre-of-mass velocity);
+     * rotational, the sum over the bodies of m |v - V|^2 / 2 over their atoms; free, the sum
+     * of m v^2 / 2 over the massive particles of no body. The three add up to
+     * computeKineticEnergy() to round-off.
+     */
+    virtual void computeKineticEnergies(OpenMM::ContextImpl& context, double& translational, double& rotational,
+                                        double& free) = 0;
     /** Whether body number index is linear (collinear atoms, 5 degrees of freedom) at the last positions set. */
     virtual bool isBodyLinear(int index) const = 0;
     /** The bodies' degrees of freedom at the last positions set: 6 each, 5 if linear, 3 if its atoms coincide. */
@@ -90,9 +102,13 @@ public:
     IntegrateMRattleStepKernel(const std::string& name, const OpenMM::Platform& platform) : RigidBodyKernel(name, platform) {
     }
     ~IntegrateMRattleStepKernel() override;
+    /** The integrator that execute() takes. */
+    typedef MRattleIntegrator IntegratorType;
+    /** One step of this integrator: see RigidBodyKernel's step contract. */
+    virtual void execute(OpenMM::ContextImpl& context, const MRattleIntegrator& integrator, bool& forcesAreValid) = 0;
 };
 
-/** Langevin dynamics with M-RATTLE (MRattleLangevinIntegrator): the integrator passed to execute() is one. */
+/** Langevin dynamics with M-RATTLE (MRattleLangevinIntegrator). */
 class OPENMM_EXPORT_MRATTLE IntegrateMRattleLangevinStepKernel : public RigidBodyKernel {
 public:
     static std::string Name() {
@@ -102,6 +118,10 @@ public:
         : RigidBodyKernel(name, platform) {
     }
     ~IntegrateMRattleLangevinStepKernel() override;
+    /** The integrator that execute() takes. */
+    typedef MRattleLangevinIntegrator IntegratorType;
+    /** One step of this integrator: see RigidBodyKernel's step contract. */
+    virtual void execute(OpenMM::ContextImpl& context, const MRattleLangevinIntegrator& integrator, bool& forcesAreValid) = 0;
 };
 
 /** The symplectic splitting baseline: the position update is a free-rotor splitting per body. */
@@ -114,6 +134,10 @@ public:
         : RigidBodyKernel(name, platform) {
     }
     ~IntegrateRigidSplittingStepKernel() override;
+    /** The integrator that execute() takes. */
+    typedef RigidSplittingIntegrator IntegratorType;
+    /** One step of this integrator: see RigidBodyKernel's step contract. */
+    virtual void execute(OpenMM::ContextImpl& context, const RigidSplittingIntegrator& integrator, bool& forcesAreValid) = 0;
 };
 
 } // namespace MRattlePlugin

@@ -1,5 +1,6 @@
 #include "CommonMRattleKernelFactory.h"
 #include "CommonMRattleKernels.h"
+#include "CommonMRattleLangevinKernels.h"
 #include "MRattlePlatforms.h"
 #include "internal/RigidBodyKernels.h"
 #include "openmm/OpenMMException.h"
@@ -22,8 +23,10 @@ std::string hostPlatformNames() {
 } // namespace
 
 KernelImpl* MRattlePlugin::createCommonKernel(const std::string& name, const Platform& platform, ComputeContext& cc) {
-    if (name == IntegrateMRattleStepKernel::Name() || name == IntegrateMRattleLangevinStepKernel::Name())
+    if (name == IntegrateMRattleStepKernel::Name())
         return new CommonIntegrateMRattleStepKernel(name, platform, cc);
+    if (name == IntegrateMRattleLangevinStepKernel::Name())
+        return new CommonIntegrateMRattleLangevinStepKernel(name, platform, cc);
     if (name == IntegrateRigidSplittingStepKernel::Name())
         throw OpenMMException("RigidSplittingIntegrator (the paper's baseline) runs on the " + hostPlatformNames() +
                               " platforms only, not on " + platform.getName() + "; MRattleIntegrator and "

@@ -1,6 +1,7 @@
 #ifndef MRATTLE_REFERENCE_LANGEVIN_KERNELS_H_
 #define MRATTLE_REFERENCE_LANGEVIN_KERNELS_H_
 
+#include "MRattleLangevinIntegrator.h"
 #include "ReferenceRigidBodyStepKernel.h"
 #include "internal/RigidBodyKernels.h"
 
@@ -15,10 +16,13 @@ namespace MRattlePlugin {
 class ReferenceIntegrateMRattleLangevinStepKernel : public ReferenceRigidBodyStepKernel<IntegrateMRattleLangevinStepKernel> {
 public:
     using ReferenceRigidBodyStepKernel::ReferenceRigidBodyStepKernel;
+    /** The shared set-up, then the noise's stream seeded now (so a checkpoint before the first step holds it). */
+    void initialize(const OpenMM::System& system, const RigidBodyTopology& topology,
+                    const RigidBodyIntegrator& integrator) override;
 
 protected:
-    void finishStep(OpenMM::ContextImpl& context, const RigidBodyIntegrator& integrator) override;
-    void integratePositions(OpenMM::ContextImpl& context, const RigidBodyIntegrator& integrator) override;
+    void finishStep(OpenMM::ContextImpl& context, const MRattleLangevinIntegrator& integrator) override;
+    void integratePositions(OpenMM::ContextImpl& context, const MRattleLangevinIntegrator& integrator) override;
 
 private:
     std::vector<OpenMM::Vec3> kicked, middlePositions, middleVelocities;  // step buffers

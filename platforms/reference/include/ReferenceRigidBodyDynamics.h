@@ -92,6 +92,9 @@ public:
     void projectNonRigidVelocities(std::vector<OpenMM::Vec3>& positions, std::vector<OpenMM::Vec3>& velocities,
                                    double tolerance);
     double kineticEnergy(const std::vector<OpenMM::Vec3>& velocities) const;
+    /** kineticEnergy() split into the bodies' translation and rotation and the free particles (RigidBodyKernel). */
+    void kineticEnergies(const std::vector<OpenMM::Vec3>& velocities, double& translational, double& rotational,
+                         double& free) const;
     /**
      * The second half of every rigid-body step, with the forces at the new positions: half
      * kick, then the velocity reset (free constraints and rigid-body projection, which for

@@ -2,6 +2,7 @@
 #define MRATTLE_REFERENCE_RIGID_BODY_STEP_KERNEL_H_
 
 #include "BodyShapeConstraints.h"
+#include "HostRigidBodyRules.h"
 #include "ReferenceRigidBodyDynamics.h"
 #include "RigidBodyIntegrator.h"
 #include "openmm/OpenMMException.h"
@@ -22,6 +23,7 @@ namespace MRattlePlugin {
 template <class StepKernel>
 class ReferenceRigidBodyStepKernel : public StepKernel {
 public:
+    typedef typename StepKernel::IntegratorType Integrator;
     ReferenceRigidBodyStepKernel(const std::string& name, const OpenMM::Platform& platform) : StepKernel(name, platform) {
     }
     void initialize(const OpenMM::System& system, const RigidBodyTopology& topology,
@@ -34,7 +36,7 @@ public:
         for (int i = 0; i < system.getNumParticles(); i++)
             hasVirtualSites |= system.isVirtualSite(i);
     }
-    void execute(OpenMM::ContextImpl& context, const RigidBodyIntegrator& integrator, bool& forcesAreValid) override {
+    void execute(OpenMM::ContextImpl& context, const Integrator& integrator, bool& forcesAreValid) override {
         useThreadsOf(context);
         const double tolerance = integrator.getConstraintTolerance();
         if (dynamics->hasAndersenThermostat())
@@ -74,6 +76,10 @@ public:
     double computeKineticEnergy(OpenMM::ContextImpl& context) override {
         return dynamics->kineticEnergy(ReferenceRigidBodyDynamics::velocities(context));
     }
+    void computeKineticEnergies(OpenMM::ContextImpl& context, double& translational, double& rotational,
+                                double& free) override {
+        dynamics->kineticEnergies(ReferenceRigidBodyDynamics::velocities(context), translational, rotational, free);
+    }
     bool isBodyLinear(int index) const override {
         return dynamics->isLinear(index);
     }
@@ -109,18 +115,14 @@ protected:
             context.computeVirtualSites();
     }
     bool hasVirtualSites = false;
-    /** Throw naming the first particle whose value is not finite. */
     static void requireFinite(const std::vector<OpenMM::Vec3>& values, const char* what) {
-        for (size_t i = 0; i < values.size(); i++)
-            if (!std::isfinite(values[i][0] + values[i][1] + values[i][2]))
-                throw OpenMM::OpenMMException(std::string("the ") + what + " of particle " + std::to_string(i) +
-                                              " is not finite");
+        HostRigidBodyRules::requireFinite(values, what);
     }
     /**
      * After the forces at the new positions: velocity Verlet's closing half kick and the
      * projection (a leapfrog integrator only advances the clock); advances time and step count.
      */
-    virtual void finishStep(OpenMM::ContextImpl& context, const RigidBodyIntegrator& integrator) {
+    virtual void finishStep(OpenMM::ContextImpl& context, const Integrator& integrator) {
         dynamics->kickAndProject(context, integrator.getStepSize(), integrator.getConstraintTolerance());
     }
     /**
@@ -128,7 +130,7 @@ protected:
      * free-particle constraints, virtual sites. Throws an OpenMMException, with the Context
      * unchanged, if the update fails.
      */
-    virtual void integratePositions(OpenMM::ContextImpl& context, const RigidBodyIntegrator& integrator) = 0;
+    virtual void integratePositions(OpenMM::ContextImpl& context, const Integrator& integrator) = 0;
 
     std::unique_ptr<ReferenceRigidBodyDynamics> dynamics;
     std::unique_ptr<BodyShapeConstraints> shapes;

@@ -1,6 +1,7 @@
 #ifndef MRATTLE_REFERENCE_RIGID_SPLITTING_KERNELS_H_
 #define MRATTLE_REFERENCE_RIGID_SPLITTING_KERNELS_H_
 
+#include "RigidSplittingIntegrator.h"
 #include "ReferenceRigidBodyStepKernel.h"
 #include "internal/RigidBodyKernels.h"
 
@@ -12,7 +13,7 @@ public:
     using ReferenceRigidBodyStepKernel::ReferenceRigidBodyStepKernel;
 
 protected:
-    void integratePositions(OpenMM::ContextImpl& context, const RigidBodyIntegrator& integrator) override;
+    void integratePositions(OpenMM::ContextImpl& context, const RigidSplittingIntegrator& integrator) override;
 };
 
 } // namespace MRattlePlugin

@@ -7,7 +7,7 @@ using namespace MRattlePlugin;
 using namespace OpenMM;
 using std::vector;
 
-void ReferenceIntegrateMRattleStepKernel::integratePositions(ContextImpl& context, const RigidBodyIntegrator& integrator) {
+void ReferenceIntegrateMRattleStepKernel::integratePositions(ContextImpl& context, const MRattleIntegrator& integrator) {
     vector<Vec3>& x = ReferenceRigidBodyDynamics::positions(context);
     vector<Vec3>& v = ReferenceRigidBodyDynamics::velocities(context);
     const vector<Vec3>& f = ReferenceRigidBodyDynamics::forces(context);

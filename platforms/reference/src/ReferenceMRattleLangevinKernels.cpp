@@ -9,21 +9,25 @@ using namespace MRattlePlugin;
 using namespace OpenMM;
 using std::vector;
 
-void ReferenceIntegrateMRattleLangevinStepKernel::finishStep(ContextImpl& context, const RigidBodyIntegrator& integrator) {
+void ReferenceIntegrateMRattleLangevinStepKernel::initialize(const System& system, const RigidBodyTopology& topology,
+                                                            const RigidBodyIntegrator& integrator) {
+    ReferenceRigidBodyStepKernel::initialize(system, topology, integrator);
+    dynamics->seedRandom(static_cast<const MRattleLangevinIntegrator&>(integrator).getRandomNumberSeed());
+}
+
+void ReferenceIntegrateMRattleLangevinStepKernel::finishStep(ContextImpl& context, const MRattleLangevinIntegrator& integrator) {
     // Leapfrog: the next step's kick uses these forces; the velocities stay mid-step.
     ReferenceRigidBodyDynamics::advanceClock(context, integrator.getStepSize());
 }
 
 void ReferenceIntegrateMRattleLangevinStepKernel::integratePositions(ContextImpl& context,
-                                                                    const RigidBodyIntegrator& rigidIntegrator) {
-    const MRattleLangevinIntegrator& integrator = dynamic_cast<const MRattleLangevinIntegrator&>(rigidIntegrator);
+                                                                    const MRattleLangevinIntegrator& integrator) {
     vector<Vec3>& x = ReferenceRigidBodyDynamics::positions(context);
     vector<Vec3>& v = ReferenceRigidBodyDynamics::velocities(context);
     const vector<Vec3>& f = ReferenceRigidBodyDynamics::forces(context);
     const vector<double>& inverseMass = dynamics->inverseMasses();
     const double h = integrator.getStepSize(), tolerance = integrator.getConstraintTolerance();
     const int n = x.size();
-    dynamics->seedRandom(integrator.getRandomNumberSeed());
     // A full kick (leapfrog) and RATTLE's velocity step at the current positions.
     kicked.resize(n);
     dynamics->forEachParticleRange([&](int begin, int end) {

@@ -1,4 +1,5 @@
 #include "ReferenceRigidBodyDynamics.h"
+#include "HostRigidBodyRules.h"
 #include "openmm/AndersenThermostat.h"
 #include "openmm/OpenMMException.h"
 #include "openmm/reference/ReferencePlatform.h"
@@ -18,9 +19,6 @@ ReferencePlatform::PlatformData& platformData(ContextImpl& context) {
     // The CPU platform derives from the Reference platform and keeps this data too.
     return *reinterpret_cast<ReferencePlatform::PlatformData*>(context.getPlatformData());
 }
-
-/** Velocities differing from their rigid projection by more than this fraction have collided. */
-const double CollisionThreshold = 1e-8;
 
 } // namespace
 
@@ -161,21 +159,14 @@ void ReferenceRigidBodyDynamics::forEachParticleRange(const std::function<void(i
 }
 
 void ReferenceRigidBodyDynamics::updateShapes(const vector<Vec3>& positions) {
-    const double* data = reinterpret_cast<const double*>(positions.data());
-    for (int b = 0; b < bodies.getNumBodies(); b++) {
-        const RigidBodyMath::BodyView& body = view(b);
-        Eigen::Vector3d center = RigidBodyMath::centerOfMass(body, data);
-        shapes[b] = RigidBodyMath::classifyShape(RigidBodyMath::secondMoment(body, data, center), body.totalMass);
-        // A point rotates no more than a line does: both take the linear body's arithmetic.
+    shapes = HostRigidBodyRules::classifyShapes(bodies, positions);
+    // A point rotates no more than a line does: both take the linear body's arithmetic.
+    for (int b = 0; b < bodies.getNumBodies(); b++)
         views[b].linear = (shapes[b] != RigidBodyMath::Shape::General);
-    }
 }
 
 int ReferenceRigidBodyDynamics::getBodyDegreesOfFreedom() const {
-    int dof = 0;
-    for (RigidBodyMath::Shape shape : shapes)
-        dof += RigidBodyMath::degreesOfFreedom(shape);
-    return dof;
+    return HostRigidBodyRules::bodyDegreesOfFreedom(shapes);
 }
 
 void ReferenceRigidBodyDynamics::seedRandom(int seed) {
@@ -296,43 +287,35 @@ double ReferenceRigidBodyDynamics::kineticEnergy(const vector<Vec3>& velocities)
     return energy;
 }
 
+void ReferenceRigidBodyDynamics::kineticEnergies(const vector<Vec3>& velocities, double& translational,
+                                                 double& rotational, double& free) const {
+    translational = rotational = free = 0;
+    for (int b = 0; b < bodies.getNumBodies(); b++) {
+        const vector<int>& atoms = bodies.getBodyParticles(b);
+        Vec3 momentum;
+        for (int i : atoms)   // body members are massive
+            momentum += velocities[i] / inverseMass[i];
+        const double mass = bodies.getBodyMass(b);
+        const Vec3 center = momentum / mass;
+        translational += 0.5 * mass * center.dot(center);
+        for (int i : atoms) {
+            const Vec3 relative = velocities[i] - center;
+            rotational += 0.5 * relative.dot(relative) / inverseMass[i];
+        }
+    }
+    for (int i : bodies.getFreeParticles())
+        free += 0.5 * velocities[i].dot(velocities[i]) / inverseMass[i];
+}
+
 vector<Vec3> ReferenceRigidBodyDynamics::velocitiesForTemperature(vector<Vec3>& positions, double temperature,
                                                                   int randomSeed, double tolerance) {
     // Maxwell-Boltzmann per particle, then the rigid-body projection (which keeps the
     // distribution's form on the rigid degrees of freedom), then an exact rescale to the
     // requested kinetic temperature with the rigid-body degrees of freedom.
-    std::mt19937_64 generator(randomSeed);
-    std::normal_distribution<double> gaussian(0.0, 1.0);
-    const int numParticles = inverseMass.size();
-    vector<Vec3> velocities(numParticles, Vec3());
-    for (int i = 0; i < numParticles; i++) {
-        if (inverseMass[i] != 0) {
-            double scale = std::sqrt(BOLTZ * temperature * inverseMass[i]);
-            double x = gaussian(generator), y = gaussian(generator), z = gaussian(generator);
-            velocities[i] = Vec3(x, y, z) * scale;
-        }
-    }
+    vector<Vec3> velocities = HostRigidBodyRules::maxwellBoltzmannVelocities(inverseMass, temperature, randomSeed);
     projectVelocities(positions, velocities, tolerance);
-    const vector<double>& masses = bodies.getMasses();
-    double totalMass = 0;
-    Vec3 momentum;
-    for (int i = 0; i < numParticles; i++) {
-        totalMass += masses[i];
-        momentum += velocities[i] * masses[i];
-    }
-    if (bodies.removesCenterOfMassMotion() && totalMass > 0) {
-        Vec3 centerVelocity = momentum / totalMass;
-        for (int i = 0; i < numParticles; i++)
-            if (inverseMass[i] != 0)
-                velocities[i] -= centerVelocity;
-    }
-    double kinetic = kineticEnergy(velocities);
-    int dof = bodies.getNumDegreesOfFreedom(getBodyDegreesOfFreedom());
-    if (kinetic > 0 && dof > 0) {
-        double scale = std::sqrt(0.5 * dof * BOLTZ * temperature / kinetic);
-        for (Vec3& v : velocities)
-            v *= scale;
-    }
+    HostRigidBodyRules::scaleToTemperature(bodies, inverseMass, bodies.getNumDegreesOfFreedom(getBodyDegreesOfFreedom()),
+                                           temperature, velocities);
     return velocities;
 }
 
@@ -347,7 +330,7 @@ void ReferenceRigidBodyDynamics::collideBodies(ContextImpl& context, double tole
     const double temperature = context.getParameter(AndersenThermostat::Temperature());
     std::normal_distribution<double> gaussian(0.0, 1.0);
     for (int b = 0; b < bodies.getNumBodies(); b++) {
-        if (!(RigidBodyMath::nonRigidVelocityFraction(view(b), positionData, coordinates(v)) > CollisionThreshold))
+        if (!(RigidBodyMath::nonRigidVelocityFraction(view(b), positionData, coordinates(v)) > RigidBodyMath::CollisionThreshold))
             continue;  // still rigid: no collision
         for (int i : bodies.getBodyParticles(b)) {
             double sigma = std::sqrt(BOLTZ * temperature * inverseMass[i]);
@@ -361,25 +344,11 @@ void ReferenceRigidBodyDynamics::collideBodies(ContextImpl& context, double tole
 void ReferenceRigidBodyDynamics::writeState(std::ostream& stream) const {
     std::ostringstream text;
     text << collisionRandom;
-    const std::string state = text.str();
-    int32_t length = state.size();
-    stream.write(reinterpret_cast<const char*>(&length), sizeof(length));
-    stream.write(state.data(), length);
+    HostRigidBodyRules::writeKernelState(stream, text.str());
 }
 
 void ReferenceRigidBodyDynamics::readState(std::istream& stream) {
-    int32_t length = -1;
-    stream.read(reinterpret_cast<char*>(&length), sizeof(length));
-    if (!stream || stream.gcount() != (std::streamsize) sizeof(length))
-        throw OpenMMException("the checkpoint is truncated (it ends before the kernel's random state)");
-    if (length < 0 || length > (1 << 20))
-        throw OpenMMException("the checkpoint's kernel data is malformed (random state of length " +
-                              std::to_string(length) + ")");
-    std::string state(length, ' ');
-    stream.read(&state[0], length);
-    if (!stream || stream.gcount() != length)
-        throw OpenMMException("the checkpoint is truncated (it ends in the kernel's random state)");
-    std::istringstream text(state);
+    std::istringstream text(HostRigidBodyRules::readKernelState(stream));
     std::mt19937_64 generator;
     text >> generator;
     if (text.fail())

@@ -10,7 +10,7 @@ using namespace OpenMM;
 using std::vector;
 
 void ReferenceIntegrateRigidSplittingStepKernel::integratePositions(ContextImpl& context,
-                                                                   const RigidBodyIntegrator& integrator) {
+                                                                   const RigidSplittingIntegrator& integrator) {
     vector<Vec3>& x = ReferenceRigidBodyDynamics::positions(context);
     vector<Vec3>& v = ReferenceRigidBodyDynamics::velocities(context);
     vector<Vec3>& f = ReferenceRigidBodyDynamics::forces(context);

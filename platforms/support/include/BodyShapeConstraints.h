@@ -22,12 +22,28 @@ namespace MRattlePlugin {
 class BodyShapeConstraints {
 public:
     BodyShapeConstraints(const OpenMM::System& system, const RigidBodyTopology& topology);
-    /** Move the bodies that are off their constraint geometry onto it; true if any moved. */
-    bool apply(std::vector<OpenMM::Vec3>& positions) const;
-    /** The largest relative error of a body's shape constraints at these positions. */
-    double error(const std::vector<OpenMM::Vec3>& positions, int body) const;
+    /**
+     * Move the bodies that are off their constraint geometry onto it; true if any moved.
+     *
+     * @param storageError  how far (nm) a platform's stored coordinates can be from the ones
+     *                      set (0 in double precision; single precision rounds a 3 nm box's
+     *                      coordinates by ~1e-7 nm): a distance within Tolerance of its
+     *                      constraint plus what that rounding can make of it is on the
+     *                      geometry, so a body corrected once is left alone when its stored
+     *                      positions are set again (the correction is idempotent)
+     */
+    bool apply(std::vector<OpenMM::Vec3>& positions, double storageError = 0) const;
+    /** The largest error of a body's shape constraints at these positions, relative to Tolerance plus the storage allowance. */
+    double error(const std::vector<OpenMM::Vec3>& positions, int body, double storageError = 0) const;
     /** Relative constraint error above which a body's shape is corrected (OpenMM 7.7's SETTLE is good to ~3e-8). */
     static constexpr double Tolerance = 1e-6;
+    /**
+     * What rounding each stored coordinate by storageError can do to a distance: both ends,
+     * three coordinates each (2 sqrt(3)), times 8 to spare: OpenCL's single and mixed
+     * storage was measured to leave TIP3P waters of a 3 nm box 1.6e-6 and 2.6e-6 nm off
+     * their geometry, about 4x a float's rounding there.
+     */
+    static constexpr double StorageErrorFactor = 16 * 1.7320508075688772;
 
 private:
     RigidBodyTopology topology;

@@ -43,17 +43,18 @@ BodyShapeConstraints::BodyShapeConstraints(const System& system, const RigidBody
         constraints.reset(new ReferenceConstraints(shapes));
 }
 
-double BodyShapeConstraints::error(const vector<Vec3>& positions, int body) const {
+double BodyShapeConstraints::error(const vector<Vec3>& positions, int body, double storageError) const {
     double worst = 0;
     for (int c : constraintsOfBody[body]) {
         Vec3 d = positions[p1[c]] - positions[p2[c]];
-        const double relative = std::fabs(std::sqrt(d.dot(d)) - distance[c]) / distance[c];
+        const double allowed = Tolerance * distance[c] + StorageErrorFactor * storageError;
+        const double relative = Tolerance * std::fabs(std::sqrt(d.dot(d)) - distance[c]) / allowed;
         worst = std::isfinite(relative) ? std::max(worst, relative) : INFINITY;
     }
     return worst;
 }
 
-bool BodyShapeConstraints::apply(vector<Vec3>& positions) const {
+bool BodyShapeConstraints::apply(vector<Vec3>& positions, double storageError) const {
     if (!constraints)
         return false;
     // Only bodies clearly off their geometry (a PDB file's waters are off by ~1e-3) move:
@@ -62,7 +63,7 @@ bool BodyShapeConstraints::apply(vector<Vec3>& positions) const {
     vector<char> off(topology.getNumBodies(), 0);
     bool anyOff = false;
     for (int body = 0; body < topology.getNumBodies(); body++)
-        if (!constraintsOfBody[body].empty() && error(positions, body) > Tolerance)
+        if (!constraintsOfBody[body].empty() && error(positions, body, storageError) > Tolerance)
             anyOff = off[body] = 1;
     if (!anyOff)
         return false;

@@ -1,0 +1,332 @@
+"""Equipartition of rigid water between translation and rotation against the step size (issue 24).
+
+NVE runs of OpenMM's rigid TIP3P box (app/data/tip3p.pdb) and rigid SPC/E box (app/data/spce.pdb),
+from one equilibrated start per model (LangevinMiddle + SETTLE at 300 K), with MRattleIntegrator
+beside VerletIntegrator with SETTLE at 0.5, 1, 2, 3 and 4 fs, and MRattleLangevinIntegrator at 2 and
+4 fs. The translational and rotational temperatures of every run come from the same formula
+(rigid_split: 1/2 M V^2 per molecule, the rest of its kinetic energy rotational, the
+CMMotionRemover's 3 degrees of freedom taken from the translations), on the on-step velocities of
+each integrator (for OpenMM's leapfrog VerletIntegrator rebuilt from its half-step ones), means and
+standard errors from block averages. Asthagiri & Beck (2024) found that NVE rigid SPC/E water reaches equipartition only
+at 0.5 fs, with the rotational temperature below the translational at 1-3 fs.
+
+    /usr/bin/python3 benchmarks/run_suite.py --only equipartition   # or ./benchmarks/run.sh --only equipartition
+"""
+import csv
+import math
+import multiprocessing
+import os
+import sys
+import time
+
+import numpy as np
+import openmm
+from openmm import app, unit
+
+import mrattle
+
+from . import langevin
+
+MODELS = (('TIP3P', 'tip3p.pdb', 'amber14/tip3p.xml'), ('SPC/E', 'spce.pdb', 'amber14/spce.xml'))
+NVE_STEPS_FS = (0.5, 1, 2, 3, 4)
+LANGEVIN_STEPS_FS = (2, 4)
+METHODS = ('M-RATTLE', 'Verlet + SETTLE')
+TEMPERATURE = 300.0
+BLOCKS = 10
+
+
+def water(pdb_name, forcefield_name):
+    """The rigid water box with PME (0.9 nm), its waters at the model's exact geometry, and the bodies."""
+    pdb = app.PDBFile(os.path.join(os.path.dirname(app.__file__), 'data', pdb_name))
+    system = app.ForceField(forcefield_name).createSystem(pdb.topology, nonbondedMethod=app.PME,
+                                                          nonbondedCutoff=0.9 * unit.nanometers, rigidWater=True)
+    positions = langevin.exact_geometry(system, pdb.positions)
+    return system, positions, mrattle.rigidBodies(pdb.topology, system)
+
+
+def cpu(threads):
+    return openmm.Platform.getPlatformByName('CPU'), {'Threads': str(threads)}
+
+
+def equilibrate(system, positions, ps, threads, seed=11):
+    """LangevinMiddle + SETTLE at 300 K, 1/ps, 2 fs: the start of every run of this model."""
+    integrator = openmm.LangevinMiddleIntegrator(TEMPERATURE * unit.kelvin, 1 / unit.picosecond, 2 * unit.femtoseconds)
+    integrator.setRandomNumberSeed(seed)
+    context = openmm.Context(system, integrator, *cpu(threads))
+    context.setPositions(positions)
+    context.setVelocitiesToTemperature(TEMPERATURE * unit.kelvin, seed)
+    integrator.step(int(round(ps / 0.002)))
+    state = context.getState(getPositions=True, getVelocities=True)
+    return state.getPositions(asNumpy=True), state.getVelocities(asNumpy=True)
+
+
+def make_integrator(method, step_fs):
+    step = step_fs * unit.femtoseconds
+    if method == 'M-RATTLE':
+        return mrattle.MRattleIntegrator(step)
+    if method == 'M-RATTLE Langevin':
+        integrator = mrattle.MRattleLangevinIntegrator(TEMPERATURE * unit.kelvin, 1 / unit.picosecond, step)
+        integrator.setRandomNumberSeed(5)
+        return integrator
+    if method == 'Verlet + SETTLE':
+        return openmm.VerletIntegrator(step)
+    raise ValueError('unknown method %r' % method)
+
+
+def against_published(result):
+    """How a run compares with Asthagiri & Beck (2024): equipartition at 0.5 fs, T_rot < T_trans at 1-3 fs."""
+    step = result['step_fs']
+    if result['failure'] is not None or step > 3:
+        return ''
+    d, e = result['difference']
+    below, equal = d < -3 * e, abs(d) <= 3 * e
+    if step == 0.5:
+        return ' (consistent with it)' if equal else ' (differs from it)'
+    return ' (consistent with it)' if below else ' (not resolved at this run length)' if equal else ' (contradicts it)'
+
+
+HALF_STEP = 'Verlet + SETTLE, State velocities (half step)'
+
+
+def rigid_split(velocities, positions, masses, bodies, project=True):
+    """Translational and rotational kinetic energy of the bodies (kJ/mol): each body's velocities
+    made rigid at the positions first (the mass-weighted projection, RATTLE's velocity step: the
+    identity for velocities that are rigid already), then 1/2 M V^2 and sum m |v - V|^2 / 2, the
+    formula RigidBodyIntegrator.computeTranslationalKineticEnergy() uses (project=False: that
+    formula on the velocities as they are). Bodies of equal size."""
+    index = np.asarray(bodies)
+    m = masses[index]
+    mass = m.sum(axis=1)
+    x, v = positions[index], velocities[index]
+    center = (m[..., None] * x).sum(axis=1) / mass[:, None]
+    V = (m[..., None] * v).sum(axis=1) / mass[:, None]
+    a = x - center[:, None, :]
+    L = (m[..., None] * np.cross(a, v - V[:, None, :])).sum(axis=1)
+    J = np.einsum('bk,bki,bkj->bij', m, a, a)
+    inertia = np.trace(J, axis1=1, axis2=2)[:, None, None] * np.eye(3) - J
+    omega = np.linalg.solve(inertia, L[..., None])[..., 0]
+    relative = np.cross(omega[:, None, :], a) if project else v - V[:, None, :]
+    return 0.5 * np.sum(mass * (V * V).sum(axis=1)), 0.5 * np.sum(m * (relative * relative).sum(axis=2))
+
+
+def summarize(model, method, step_fs, trans, rot, times, energy, failure, wall, steps, molecules):
+    result = dict(model=model, method=method, step_fs=step_fs, failure=failure, wall_s=wall, steps=steps)
+    if failure is None:
+        result['Ttrans'] = langevin.block_mean(trans, BLOCKS)
+        result['Trot'] = langevin.block_mean(rot, BLOCKS)
+        result['difference'] = langevin.block_mean(np.asarray(rot) - np.asarray(trans), BLOCKS)
+        slope = np.polyfit(times, energy, 1)[0] if len(times) > 1 else float('nan')
+        result['drift'] = slope * 1000 / molecules  # kJ/mol per ns per molecule
+    return result
+
+
+def run_one(model, system, bodies, start, method, step_fs, discard_ps, production_ps, sample_fs, threads):
+    """One run: translational and rotational temperature and their difference (mean, SE), energy
+    drift. VerletIntegrator is leapfrog: its State velocities are half a step behind; its on-step
+    velocities are v + (h/2) f/m made rigid (velocity Verlet's, i.e. RATTLE's), and a second
+    result gives the State velocities as they are."""
+    integrator = make_integrator(method, step_fs)
+    context = openmm.Context(system, integrator, *cpu(threads))
+    context.setPositions(start[0])
+    context.setVelocities(start[1])
+    masses = np.array([system.getParticleMass(i).value_in_unit(unit.dalton) for i in range(system.getNumParticles())])
+    removes_cm = any(isinstance(f, openmm.CMMotionRemover) for f in system.getForces())
+    dof_trans, dof_rot = 3 * len(bodies) - (3 if removes_cm else 0), 3 * len(bodies)
+    leapfrog = method == 'Verlet + SETTLE'
+    stride = max(1, int(round(sample_fs / step_fs)))
+    samples = int(round(production_ps * 1000 / (stride * step_fs)))
+    h = step_fs * 0.001
+    began = time.time()
+    failure = None
+    series = {key: [] for key in ('trans', 'rot', 'halfTrans', 'halfRot', 'time', 'energy')}
+    try:
+        integrator.step(int(round(discard_ps * 1000 / step_fs)))
+        for _ in range(samples):
+            integrator.step(stride)
+            state = context.getState(getVelocities=True, getPositions=True, getEnergy=True, getForces=leapfrog)
+            v = state.getVelocities(asNumpy=True).value_in_unit(unit.nanometers / unit.picosecond)
+            x = state.getPositions(asNumpy=True).value_in_unit(unit.nanometers)
+            if leapfrog:
+                kt, kr = rigid_split(v, x, masses, bodies, project=False)
+                series['halfTrans'].append(2 * kt / (dof_trans * langevin.KB))
+                series['halfRot'].append(2 * kr / (dof_rot * langevin.KB))
+                f = state.getForces(asNumpy=True).value_in_unit(unit.kilojoules_per_mole / unit.nanometer)
+                v = v + 0.5 * h * f / masses[:, None]
+            kt, kr = rigid_split(v, x, masses, bodies)
+            series['trans'].append(2 * kt / (dof_trans * langevin.KB))
+            series['rot'].append(2 * kr / (dof_rot * langevin.KB))
+            series['time'].append(state.getTime().value_in_unit(unit.picosecond))
+            series['energy'].append((state.getKineticEnergy() + state.getPotentialEnergy()).value_in_unit(
+                unit.kilojoule_per_mole))
+            if not math.isfinite(series['energy'][-1] + kt + kr):
+                raise ArithmeticError('energy not finite at %.2f ps' % series['time'][-1])
+    except Exception as error:  # a blow-up ends the run and is reported
+        failure = str(error).splitlines()[0]
+    wall = time.time() - began
+    steps = int(round((discard_ps + production_ps) * 1000 / step_fs))
+    results = [summarize(model, method, step_fs, series['trans'], series['rot'], series['time'], series['energy'],
+                         failure, wall, steps, len(bodies))]
+    if leapfrog:
+        results.append(summarize(model, HALF_STEP, step_fs, series['halfTrans'], series['halfRot'], series['time'],
+                                 series['energy'], failure, 0.0, steps, len(bodies)))
+    return results
+
+
+def verdict(result):
+    """What the error bars support about T_rot - T_trans (3 standard errors)."""
+    if result['failure'] is not None:
+        return 'unstable: ' + result['failure']
+    d, e = result['difference']
+    if abs(d) <= 3 * e:
+        return 'equal within 3 SE (%+.1f +- %.1f K)' % (d, e)
+    return 'rotational %s translational by %.1f +- %.1f K (%.0f SE)' % ('below' if d < 0 else 'above', abs(d), e,
+                                                                        abs(d) / e)
+
+
+CSV_COLUMNS = ['model', 'method', 'step_fs', 'Ttrans', 'Ttrans_se', 'Trot', 'Trot_se', 'Trot_minus_Ttrans',
+               'difference_se', 'drift_kJ_per_mol_ns_molecule', 'failure', 'steps', 'wall_s']
+
+
+def csv_row(r):
+    ok = r['failure'] is None
+    return [r['model'], r['method'], r['step_fs']] + \
+        ([r['Ttrans'][0], r['Ttrans'][1], r['Trot'][0], r['Trot'][1], r['difference'][0], r['difference'][1],
+          r['drift']] if ok else [''] * 7) + [r['failure'] or '', r['steps'], '%.0f' % r['wall_s']]
+
+
+def run_model(task):
+    """All runs of one model (in a process of its own), each appended to a partial CSV as it ends."""
+    name, pdb_name, forcefield_name, lengths, threads, partial = task
+    equilibrate_ps, discard_ps, production_ps, sample_fs = lengths
+    began = time.time()
+
+    def log(message):
+        print('[%6.0f s] equipartition: %s' % (time.time() - began, message), file=sys.stderr, flush=True)
+
+    system, positions, bodies = water(pdb_name, forcefield_name)
+    start = equilibrate(system, positions, equilibrate_ps, threads)
+    log('%s, %d waters, equilibrated %.1f ps' % (name, len(bodies), equilibrate_ps))
+    # The large steps first: cheapest, and where the published bias is.
+    runs = [(method, step) for step in (3, 4, 2) for method in METHODS]
+    runs += [('M-RATTLE Langevin', step) for step in LANGEVIN_STEPS_FS]
+    runs += [(method, step) for step in (1, 0.5) for method in METHODS]
+    rows = []
+    with open(partial, 'w', newline='') as stream:
+        csv.writer(stream).writerow(CSV_COLUMNS)
+    for method, step in runs:
+        for result in run_one(name, system, bodies, start, method, step, discard_ps, production_ps, sample_fs,
+                              threads):
+            log('%s %-17s %.1f fs: %s (%d steps in %.0f s)' % (name, result['method'], step, verdict(result),
+                                                                result['steps'], result['wall_s']))
+            rows.append(result)
+            with open(partial, 'a', newline='') as stream:
+                csv.writer(stream).writerow(csv_row(result))
+    return len(bodies), rows
+
+
+def run(quick, out, log, threads=1):
+    """Run every model and step size, the two models in two processes of one CPU thread each (on a
+    shared machine two single-thread processes lose less to waiting than one of two threads);
+    write out + '.csv'; return the report as markdown lines. Each model's runs are also appended
+    to out + '.partial-<model>.csv' as they end (removed at the end), so a run cut short keeps
+    what it has."""
+    if quick:
+        lengths = (0.02, 0.01, 0.04, 4)
+    else:
+        # Sized for a shared 2-core machine (a PME step of the 2685-atom box took 0.016-0.17 s there).
+        lengths = (2.0, 0.3, 2.5, 10)
+    os.makedirs(os.path.dirname(os.path.abspath(out)), exist_ok=True)
+    tasks = [(name, pdb_name, forcefield_name, lengths, threads,
+              '%s.partial-%s.csv' % (out, name.replace('/', '')))
+             for name, pdb_name, forcefield_name in MODELS]
+    began = time.time()
+    with multiprocessing.get_context('spawn').Pool(len(tasks)) as pool:
+        results = pool.map(run_model, tasks)
+    log('equipartition: both models in %.0f s' % (time.time() - began))
+    by_model = {task[0]: result[0] for task, result in zip(tasks, results)}
+    rows = [row for result in results for row in result[1]]
+    with open(out + '.csv', 'w', newline='') as stream:
+        writer = csv.writer(stream)
+        writer.writerow(CSV_COLUMNS)
+        for row in rows:
+            writer.writerow(csv_row(row))
+    for task in tasks:
+        os.remove(task[-1])
+    return report(rows, by_model, quick, *lengths, threads)
+
+
+def report(rows, by_model, quick, equilibrate_ps, discard_ps, production_ps, sample_fs, threads):
+    md = ['\n## Equipartition of rigid water against step size (NVE)\n',
+          'OpenMM\'s `app/data/tip3p.pdb` (%d waters, `amber14/tip3p.xml`) and `app/data/spce.pdb` (%d waters, '
+          '`amber14/spce.xml`), PME (0.9 nm), CPU platform with %d thread(s) (the two models in two processes), '
+          'each water set to its model\'s exact '
+          'geometry. Every run starts from the same state per model: %s ps of LangevinMiddle + SETTLE at 300 K '
+          '(1/ps, 2 fs). NVE runs then drop %s ps and sample the velocities every %s fs for %s ps; '
+          '`MRattleLangevinIntegrator` (300 K, 1/ps, its half-step velocities) is run the same way. '
+          'Translational temperature: 1/2 M V^2 of each water over 3 per water minus the CMMotionRemover\'s 3; '
+          'rotational: the rest of the kinetic energy over 3 per water; the same formula for every integrator, '
+          'on its on-step velocities: OpenMM\'s `VerletIntegrator` is leapfrog, so its State velocities (half a '
+          'step behind) get the half kick (h/2) f/m and the rigid-body projection, which gives velocity Verlet\'s '
+          '(RATTLE\'s) on-step velocities; its State velocities as they are make a row of their own '
+          '(`benchmarks/suite/equipartition.py`, checked against `MRattleIntegrator`\'s own '
+          '`computeTranslationalTemperature()` in `tests/python/test_kinetic_split.py`). Means +- standard '
+          'errors from %d block averages; the difference T_rot - T_trans is block-averaged as one series '
+          '(the two temperatures are anticorrelated in NVE). Drift: slope of the total energy, kJ/mol/ns per '
+          'water.%s\n' % (by_model.get('TIP3P', 0), by_model.get('SPC/E', 0), threads, equilibrate_ps, discard_ps,
+                          sample_fs, production_ps, BLOCKS,
+                          ' **Quick smoke run: too short to conclude anything.**' if quick else '')]
+    md.append('| Model | Step (fs) | Integrator | T_trans (K) | T_rot (K) | T_rot - T_trans (K) | Drift | What the error bars support |')
+    md.append('|---|---|---|---|---|---|---|---|')
+    order = {name: k for k, (name, _, _) in enumerate(MODELS)}
+    ranks = {method: k for k, method in enumerate(METHODS + (HALF_STEP, 'M-RATTLE Langevin'))}
+    rows = sorted(rows, key=lambda r: (order[r['model']], r['step_fs'], ranks[r['method']]))
+    for r in rows:
+        if r['failure'] is not None:
+            md.append('| %s | %g | %s | - | - | - | - | %s |' % (r['model'], r['step_fs'], r['method'], verdict(r)))
+            continue
+        md.append('| %s | %g | %s | %.1f +- %.1f | %.1f +- %.1f | %+.1f +- %.1f | %.3g | %s |' % (
+            r['model'], r['step_fs'], r['method'], r['Ttrans'][0], r['Ttrans'][1], r['Trot'][0], r['Trot'][1],
+            r['difference'][0], r['difference'][1], r['drift'], verdict(r)))
+    md.append('')
+    md.append('Per step size, NVE (3 SE as the threshold), against Asthagiri & Beck (2024): equipartition at 0.5 fs, '
+              'T_rot < T_trans at 1-3 fs for rigid SPC/E:\n')
+    for step in NVE_STEPS_FS:
+        parts = []
+        for r in rows:
+            if r['step_fs'] == step and r['method'] in METHODS:
+                parts.append('%s %s: %s%s' % (r['model'], r['method'], verdict(r), against_published(r)))
+        published = ('published: equipartition' if step == 0.5 else
+                     'published: T_rot below T_trans' if step <= 3 else 'beyond the published range')
+        md.append('- **%g fs** (%s): %s.' % (step, published, '; '.join(parts) or 'not run'))
+    pairs = []
+    for r in rows:
+        if r['method'] == METHODS[0] and r['failure'] is None:
+            other = [o for o in rows if o['model'] == r['model'] and o['step_fs'] == r['step_fs']
+                     and o['method'] == METHODS[1] and o['failure'] is None]
+            if other:
+                (d1, e1), (d2, e2) = r['difference'], other[0]['difference']
+                pairs.append('%s %g fs %.1f' % (r['model'], r['step_fs'], abs(d1 - d2) / math.hypot(e1, e2)))
+    if pairs:
+        md.append('\nA check of the error bars: M-RATTLE and Verlet + SETTLE (on-step) integrate the same equations '
+                  '(both are RATTLE) from the same start: their trajectories differ only by round-off, which grows '
+                  'chaotically, so their T_rot - T_trans should differ only by the statistical error. Their '
+                  'differences, in '
+                  'combined standard errors: %s. Values well above 2 mean the block error bars understate the '
+                  'scatter at this run length, and the verdicts above are to be read with that.' % ', '.join(pairs))
+    return md
+
+
+def rows_from_csv(path):
+    """The rows of a CSV that run() or run_model() wrote (to report a run, or a run cut short)."""
+    rows = []
+    with open(path) as stream:
+        for r in csv.DictReader(stream):
+            row = dict(model=r['model'], method=r['method'], step_fs=float(r['step_fs']), failure=r['failure'] or None,
+                       steps=int(r['steps']), wall_s=float(r['wall_s']))
+            if row['failure'] is None:
+                row['Ttrans'] = (float(r['Ttrans']), float(r['Ttrans_se']))
+                row['Trot'] = (float(r['Trot']), float(r['Trot_se']))
+                row['difference'] = (float(r['Trot_minus_Ttrans']), float(r['difference_se']))
+                row['drift'] = float(r['drift_kJ_per_mol_ns_molecule'])
+            rows.append(row)
+    return rows

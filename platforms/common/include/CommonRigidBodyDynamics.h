@@ -1,0 +1,132 @@
+#ifndef MRATTLE_COMMON_RIGID_BODY_DYNAMICS_H_
+#define MRATTLE_COMMON_RIGID_BODY_DYNAMICS_H_
+
+#include "BodyShapeConstraints.h"
+#include "CommonBodyKineticEnergy.h"
+#include "RigidBodyTopology.h"
+#include "mrattle/RigidBodyMath.h"
+#include "openmm/System.h"
+#include "openmm/common/ComputeArray.h"
+#include "openmm/common/ComputeContext.h"
+#include "openmm/common/ComputeKernel.h"
+#include "openmm/common/ComputeProgram.h"
+#include <iosfwd>
+#include <memory>
+#include <string>
+#include <vector>
+
+namespace OpenMM {
+class ContextImpl;
+}
+
+namespace MRattlePlugin {
+
+class RigidBodyIntegrator;
+
+/**
+ * What every rigid-body integrator does the same way on the common compute platforms
+ * (OpenCL, CUDA), as ReferenceRigidBodyDynamics does on Reference and CPU: the body and
+ * free-constraint arrays on the device (mapped to the device's atom order whenever OpenMM
+ * reorders atoms), the phases of a step (kicks, drift and reset, projection, forces), the
+ * failure check at the end of every step with the state put back, shapes, temperature
+ * velocities, kinetic energy and checkpoints. One work item per body or per cluster of
+ * free constraints. An integrator's kernel (CommonMRattleKernels.h, ...) sequences the
+ * phases.
+ */
+class CommonRigidBodyDynamics {
+public:
+    /** @param integratorName  what failures are reported as ("MRattleIntegrator") */
+    CommonRigidBodyDynamics(OpenMM::ComputeContext& cc, const std::string& integratorName);
+    ~CommonRigidBodyDynamics();
+    CommonRigidBodyDynamics(const CommonRigidBodyDynamics&) = delete;
+    CommonRigidBodyDynamics& operator=(const CommonRigidBodyDynamics&) = delete;
+
+    /** Upload the bodies and free constraints and compile the step's kernels. */
+    void initialize(const OpenMM::System& system, const RigidBodyTopology& topology);
+    OpenMM::ComputeContext& computeContext() {
+        return cc;
+    }
+    /** A program of the step's device code with these sources appended (an integrator's own kernels). */
+    OpenMM::ComputeProgram compileWith(const std::string& sources);
+    /** Add or set a kernel argument in the precision of the integration arithmetic ('mixed'). */
+    void addMixedArg(OpenMM::ComputeKernel& kernel, double value) const;
+    void setMixedArg(OpenMM::ComputeKernel& kernel, int index, double value) const;
+    /** The fixed-point force buffer and the failure flag, for an integrator's own kernels. */
+    OpenMM::ComputeArray& failureFlag() {
+        return failure;
+    }
+
+    /**
+     * The start of every step: back up the state (a failed step puts it back), the Andersen
+     * collisions of whole bodies, then the forces unless they are valid for the current
+     * positions and atom order.
+     */
+    void beginStep(OpenMM::ContextImpl& context, const RigidBodyIntegrator& integrator, bool& forcesAreValid);
+    /** A kick over kickTime (0: none), a drift over h, the bodies' resets and the free constraints. */
+    void driftAndReset(double kickTime, double h, double tolerance);
+    /** A kick of the Context's velocities over this time with its forces. */
+    void kick(double time);
+    /** RATTLE's velocity step: bodies onto rigid-body motion (only those not rigid, if asked), free constraints. */
+    void project(double tolerance, bool onlyIfNotRigid);
+    /** Virtual sites at the new positions, then the forces there. */
+    void computeForces(OpenMM::ContextImpl& context, const RigidBodyIntegrator& integrator, bool& forcesAreValid);
+    /**
+     * The end of every step: if anything of it failed, put the state back and throw an
+     * OpenMMException (time and step count unchanged); else advance the clock and let
+     * OpenMM reorder atoms (the forces are then no longer those of the atoms' order).
+     */
+    void endStep(double stepSize, bool& forcesAreValid);
+
+    /** RigidBodyKernel's work, the same for every integrator. */
+    void updateShapes(OpenMM::ContextImpl& context);
+    void projectVelocities(OpenMM::ContextImpl& context, double tolerance);
+    std::vector<OpenMM::Vec3> velocitiesForTemperature(OpenMM::ContextImpl& context, double temperature, int randomSeed,
+                                                       double tolerance);
+    double kineticEnergy();
+    /** The kinetic energy of the bodies' translation, their rotation, and the free particles. */
+    void kineticEnergies(double& translational, double& rotational, double& free);
+    bool isLinear(int body) const {
+        return shapes[body] == RigidBodyMath::Shape::Linear;
+    }
+    int bodyDegreesOfFreedom() const;
+    void createCheckpoint(std::ostream& stream) const;
+    void loadCheckpoint(std::istream& stream);
+
+private:
+    class ReorderListener;
+    /** Device atom indices of the bodies' atoms and the constraints' ends, after a reorder. */
+    void mapAtoms();
+    void setKernelArguments();
+    /** How far (nm) the device's stored coordinates can be from these positions (0 in double precision). */
+    double storageError(OpenMM::ContextImpl& context, const std::vector<OpenMM::Vec3>& positions) const;
+    /** Throw, with the state put back, if the failure flag is set. */
+    void checkStep();
+
+    OpenMM::ComputeContext& cc;
+    const std::string integratorName;
+    RigidBodyTopology bodies;
+    std::vector<int> systemBodyAtoms, systemConstraintAtoms;  // System atom indices, body-major / cluster-major
+    std::vector<RigidBodyMath::Shape> shapes;
+    std::vector<double> inverseMasses;
+    std::unique_ptr<BodyShapeConstraints> shapeConstraints;
+    std::unique_ptr<CommonBodyKineticEnergy> bodyKineticEnergy;  // reads bodyStart and bodyAtoms
+    int numBodies = 0, numClusters = 0;
+    bool hasAndersen = false, argumentsSet = false;
+    /** Set by OpenMM's reorder of atoms: the force buffer then belongs to the old order. */
+    bool atomsReordered = false;
+    /** Set while updateShapes() writes corrected positions: the Context notifies the integrator again. */
+    bool writingCorrectedShapes = false;
+    OpenMM::ComputeProgram program;
+    OpenMM::ComputeArray bodyStart, bodyAtoms, bodyLinear, clusterStart, constraintAtoms, constraintDistance;
+    OpenMM::ComputeArray newVelocity, failure, posqBackup, correctionBackup, velmBackup;
+    OpenMM::ComputeKernel kickAndDrift, resetBodies, constrainFreePositions, applyPositionStep, kickVelocities,
+        projectBodies, constrainFreeVelocities, collideBodies, backupState;
+    // Indices of the arguments set at each launch.
+    int kickAndDriftKickTime, kickAndDriftDriftTime, resetBodiesDriftTime, freePositionsDriftTime,
+        freePositionsTolerance, kickVelocitiesTime, projectOnlyIfNotRigid, freeVelocitiesTolerance, collideKT,
+        collideRandomIndex;
+};
+
+} // namespace MRattlePlugin
+
+#endif

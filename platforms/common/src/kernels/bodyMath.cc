@@ -1,0 +1,131 @@
+/*
+ * Small 3x3 algebra, positions, failures, body centres and kicks: what every other file uses.
+ *
+ * The device code of the M-RATTLE integrators on OpenMM's common compute platforms
+ * (OpenCL, CUDA), compiled as one program in the order bodyMath, rotation, step,
+ * freeConstraints, projection (collisions and langevin with it where used). Integration
+ * arithmetic is in 'mixed' precision (double in the mixed and double modes). Constants
+ * shared with the host (iteration limits, tolerances) come from the host as defines.
+ *
+ * failure[0] holds 0, or 1 once a reset, a constraint or a velocity of this step
+ * failed: every kernel that would change the state then does nothing; the host reads it
+ * at the end of every step and puts back the state from before that step.
+ */
+
+typedef struct {
+    mixed m00, m01, m02, m10, m11, m12, m20, m21, m22;
+} Matrix3;
+
+DEVICE mixed3 loadPosition(GLOBAL const real4* RESTRICT posq, GLOBAL const real4* RESTRICT posqCorrection, int atom) {
+    real4 p = posq[atom];
+#ifdef USE_MIXED_PRECISION
+    real4 c = posqCorrection[atom];
+    return make_mixed3(p.x + (mixed) c.x, p.y + (mixed) c.y, p.z + (mixed) c.z);
+#else
+    return make_mixed3(p.x, p.y, p.z);
+#endif
+}
+
+DEVICE Matrix3 zeroMatrix() {
+    Matrix3 m;
+    m.m00 = m.m01 = m.m02 = m.m10 = m.m11 = m.m12 = m.m20 = m.m21 = m.m22 = 0;
+    return m;
+}
+
+/** J += m a a^T */
+DEVICE void addOuter(Matrix3* J, mixed m, mixed3 a) {
+    J->m00 += m*a.x*a.x; J->m01 += m*a.x*a.y; J->m02 += m*a.x*a.z;
+    J->m10 += m*a.y*a.x; J->m11 += m*a.y*a.y; J->m12 += m*a.y*a.z;
+    J->m20 += m*a.z*a.x; J->m21 += m*a.z*a.y; J->m22 += m*a.z*a.z;
+}
+
+DEVICE Matrix3 multiply(Matrix3 A, Matrix3 B) {
+    Matrix3 C;
+    C.m00 = A.m00*B.m00 + A.m01*B.m10 + A.m02*B.m20;
+    C.m01 = A.m00*B.m01 + A.m01*B.m11 + A.m02*B.m21;
+    C.m02 = A.m00*B.m02 + A.m01*B.m12 + A.m02*B.m22;
+    C.m10 = A.m10*B.m00 + A.m11*B.m10 + A.m12*B.m20;
+    C.m11 = A.m10*B.m01 + A.m11*B.m11 + A.m12*B.m21;
+    C.m12 = A.m10*B.m02 + A.m11*B.m12 + A.m12*B.m22;
+    C.m20 = A.m20*B.m00 + A.m21*B.m10 + A.m22*B.m20;
+    C.m21 = A.m20*B.m01 + A.m21*B.m11 + A.m22*B.m21;
+    C.m22 = A.m20*B.m02 + A.m21*B.m12 + A.m22*B.m22;
+    return C;
+}
+
+DEVICE mixed3 apply(Matrix3 A, mixed3 v) {
+    return make_mixed3(A.m00*v.x + A.m01*v.y + A.m02*v.z, A.m10*v.x + A.m11*v.y + A.m12*v.z,
+                       A.m20*v.x + A.m21*v.y + A.m22*v.z);
+}
+
+/** A^-1 by the adjugate; returns false if A is singular. */
+DEVICE bool inverse3(Matrix3 A, Matrix3* inverse) {
+    Matrix3 C;
+    C.m00 = A.m11*A.m22 - A.m12*A.m21; C.m01 = A.m02*A.m21 - A.m01*A.m22; C.m02 = A.m01*A.m12 - A.m02*A.m11;
+    C.m10 = A.m12*A.m20 - A.m10*A.m22; C.m11 = A.m00*A.m22 - A.m02*A.m20; C.m12 = A.m02*A.m10 - A.m00*A.m12;
+    C.m20 = A.m10*A.m21 - A.m11*A.m20; C.m21 = A.m01*A.m20 - A.m00*A.m21; C.m22 = A.m00*A.m11 - A.m01*A.m10;
+    mixed det = A.m00*C.m00 + A.m01*C.m10 + A.m02*C.m20;
+    if (det == 0)
+        return false;
+    mixed inv = 1/det;
+    C.m00 *= inv; C.m01 *= inv; C.m02 *= inv;
+    C.m10 *= inv; C.m11 *= inv; C.m12 *= inv;
+    C.m20 *= inv; C.m21 *= inv; C.m22 *= inv;
+    *inverse = C;
+    return true;
+}
+
+/** Solve A x = b by A's adjugate; returns false if A is singular. */
+DEVICE bool solve3(Matrix3 A, mixed3 b, mixed3* x) {
+    Matrix3 inverse;
+    if (!inverse3(A, &inverse))
+        return false;
+    *x = apply(inverse, b);
+    return true;
+}
+
+/** The inertia I = tr(J) - J of a second moment J whose trace is given. */
+DEVICE Matrix3 inertiaOf(Matrix3 J, mixed traceJ) {
+    Matrix3 I;
+    I.m00 = traceJ - J.m00; I.m01 = -J.m01; I.m02 = -J.m02;
+    I.m10 = -J.m10; I.m11 = traceJ - J.m11; I.m12 = -J.m12;
+    I.m20 = -J.m20; I.m21 = -J.m21; I.m22 = traceJ - J.m22;
+    return I;
+}
+
+/** Every work item of one launch that fails writes the same value, so no atomic is needed. */
+DEVICE void recordFailure(GLOBAL int* RESTRICT failure) {
+    failure[0] = 1;
+}
+
+/**
+ * A body's centre of mass relative to its first atom (origin) and its mean velocity, from
+ * velocities whose .w is the inverse mass. Positions relative to the first atom keep their
+ * digits however far the body is from the origin.
+ */
+DEVICE void bodyCenterAndVelocity(int start, int end, GLOBAL const int* RESTRICT bodyAtoms,
+        GLOBAL const real4* RESTRICT posq, GLOBAL const real4* RESTRICT posqCorrection,
+        GLOBAL const mixed4* RESTRICT velocities, mixed3* origin, mixed3* center, mixed3* meanVelocity) {
+    *origin = loadPosition(posq, posqCorrection, bodyAtoms[start]);
+    mixed totalMass = 0;
+    mixed3 weighted = make_mixed3(0, 0, 0), momentum = make_mixed3(0, 0, 0);
+    for (int k = start; k < end; k++) {
+        const int atom = bodyAtoms[k];
+        const mixed4 v = velocities[atom];
+        const mixed m = 1/v.w;
+        totalMass += m;
+        weighted += m*(loadPosition(posq, posqCorrection, atom) - *origin);
+        momentum += m*make_mixed3(v.x, v.y, v.z);
+    }
+    *center = weighted*(1/totalMass);
+    *meanVelocity = momentum*(1/totalMass);
+}
+
+/** velocity += scale f / m for one atom (scale: the kick's time over the force buffer's fixed-point unit). */
+DEVICE mixed4 kicked(mixed4 velocity, mixed scale, GLOBAL const mm_long* RESTRICT force, int index, int paddedNumAtoms) {
+    velocity.x += scale*force[index]*velocity.w;
+    velocity.y += scale*force[index+paddedNumAtoms]*velocity.w;
+    velocity.z += scale*force[index+paddedNumAtoms*2]*velocity.w;
+    return velocity;
+}
+

@@ -1,0 +1,86 @@
+/*
+ * RATTLE's velocity step for rigid bodies: the mass-weighted projection onto rigid-body
+ * motion, one work item per body.
+ *
+ * (See bodyMath.cc for the program's layout and the failure flag.)
+ */
+
+/** A body's rigid-body motion: its centre (relative to its first atom, origin), V and w. */
+typedef struct {
+    mixed3 origin, center, V, omega;
+} RigidMotion;
+
+/**
+ * The mass-weighted projection of a body's velocities onto rigid-body motion,
+ * v_i = V + w x a_i with w = I^-1 L (in the plane normal to the axis for a linear body), and
+ * how far they are from it: *residual is the largest |v_i - rigid_i|^2, *scale the largest
+ * |rigid_i|^2.
+ */
+DEVICE RigidMotion rigidMotion(int start, int end, GLOBAL const int* RESTRICT bodyAtoms, int linear,
+        GLOBAL const real4* RESTRICT posq, GLOBAL const real4* RESTRICT posqCorrection,
+        GLOBAL const mixed4* RESTRICT velm, mixed* residual, mixed* scale) {
+    RigidMotion motion;
+    bodyCenterAndVelocity(start, end, bodyAtoms, posq, posqCorrection, velm, &motion.origin, &motion.center, &motion.V);
+    Matrix3 J = zeroMatrix();
+    mixed3 L = make_mixed3(0, 0, 0), u = make_mixed3(1, 0, 0);
+    mixed farthest = -1;
+    for (int k = start; k < end; k++) {
+        const int atom = bodyAtoms[k];
+        const mixed4 v = velm[atom];
+        const mixed m = 1/v.w;
+        const mixed3 a = loadPosition(posq, posqCorrection, atom) - motion.origin - motion.center;
+        addOuter(&J, m, a);
+        L += m*cross(a, make_mixed3(v.x, v.y, v.z));
+        if (dot(a, a) > farthest) {
+            farthest = dot(a, a);
+            u = a;
+        }
+    }
+    motion.omega = make_mixed3(0, 0, 0);
+    const mixed j = J.m00 + J.m11 + J.m22;
+    if (linear != 0) {
+        if (farthest > 0 && j > 0) {
+            u *= 1/sqrt(farthest);
+            motion.omega = (L - dot(L, u)*u)*(1/j);
+        }
+    }
+    else
+        solve3(inertiaOf(J, j), L, &motion.omega);
+    *scale = 0;
+    *residual = 0;
+    for (int k = start; k < end; k++) {
+        const int atom = bodyAtoms[k];
+        const mixed4 v = velm[atom];
+        const mixed3 rigid = motion.V + cross(motion.omega, loadPosition(posq, posqCorrection, atom) - motion.origin - motion.center);
+        const mixed3 difference = make_mixed3(v.x, v.y, v.z) - rigid;
+        *scale = max(*scale, dot(rigid, rigid));
+        *residual = max(*residual, dot(difference, difference));
+    }
+    return motion;
+}
+
+/**
+ * Replace every body's velocities by their rigid-body projection. With onlyIfNotRigid,
+ * velocities already rigid to round-off (RIGID_TOLERANCE) are left exactly as they are.
+ */
+KERNEL void projectBodies(int numBodies, GLOBAL const int* RESTRICT bodyStart, GLOBAL const int* RESTRICT bodyAtoms,
+        GLOBAL const int* RESTRICT bodyLinear, GLOBAL const real4* RESTRICT posq,
+        GLOBAL const real4* RESTRICT posqCorrection, GLOBAL mixed4* RESTRICT velm, int onlyIfNotRigid,
+        GLOBAL const int* RESTRICT failure) {
+    if (failure[0] != 0)
+        return;
+    for (int body = GLOBAL_ID; body < numBodies; body += GLOBAL_SIZE) {
+        const int start = bodyStart[body], end = bodyStart[body+1];
+        mixed residual, scale;
+        const RigidMotion motion = rigidMotion(start, end, bodyAtoms, bodyLinear[body], posq, posqCorrection, velm,
+                                               &residual, &scale);
+        if (onlyIfNotRigid && residual <= RIGID_TOLERANCE*RIGID_TOLERANCE*scale)
+            continue;
+        for (int k = start; k < end; k++) {
+            const int atom = bodyAtoms[k];
+            const mixed4 v = velm[atom];
+            const mixed3 rigid = motion.V + cross(motion.omega, loadPosition(posq, posqCorrection, atom) - motion.origin - motion.center);
+            velm[atom] = make_mixed4(rigid.x, rigid.y, rigid.z, v.w);
+        }
+    }
+}
