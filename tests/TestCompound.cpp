@@ -44,6 +44,7 @@ class Compound : public ::testing::TestWithParam<CompoundConfig> {
 protected:
     /** The compound of the two integrators, bound to a Context on 8 tetrahedral molecules at 300 K. */
     void SetUp() override {
+        MRATTLE_SKIP_IF_UNAVAILABLE(GetParam().platform);
         cluster = buildCluster(tetrahedral(), 2, 0.5, 12);
         compound.addIntegrator(makeIntegrator(GetParam().first, 0.001).release());
         compound.addIntegrator(makeIntegrator(GetParam().second, 0.001).release());

@@ -23,6 +23,9 @@ namespace {
 
 class Langevin : public ::testing::TestWithParam<string> {
 protected:
+    void SetUp() override {
+        MRATTLE_SKIP_IF_UNAVAILABLE(GetParam());
+    }
     std::unique_ptr<Context> makeContext(const System& system, Integrator& integrator) const {
         return std::unique_ptr<Context>(
             new Context(system, integrator, platform(GetParam()), platformProperties(GetParam())));
@@ -211,4 +214,6 @@ TEST(LangevinApi, RefusesBadParametersAndSerializes) {
     EXPECT_NE(string::npos, messageOf([&] { delete XmlSerializer::deserialize<Integrator>(bad); }).find("friction"));
 }
 
-INSTANTIATE_TEST_SUITE_P(Platforms, Langevin, ::testing::ValuesIn(langevinPlatforms()));
+// Named by platform ("Platforms/Langevin.X/CUDA"), so that a platform's cases can be selected.
+INSTANTIATE_TEST_SUITE_P(Platforms, Langevin, ::testing::ValuesIn(langevinPlatforms()),
+                         [](const ::testing::TestParamInfo<string>& info) { return info.param; });

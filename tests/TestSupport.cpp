@@ -24,13 +24,19 @@ void loadPlugins() {
         setenv("OPENMM_PLUGIN_DIR", MRATTLE_OPENMM_PLUGIN_DIR, 0);
         Platform::loadPluginsFromDirectory(Platform::getDefaultPluginsDirectory());
         registerMRattleReferenceKernelFactories();
-        // The device platforms' kernel plugins of this build, where OpenMM has the platform.
+        // The device platforms' kernel plugins of this build, where OpenMM has the platform;
+        // from MRATTLE_PLUGIN_DIR instead of the build tree where that is set (the programs
+        // copied to another machine: scripts/gpu-check.sh).
+        const char* pluginDir = std::getenv("MRATTLE_PLUGIN_DIR");
         for (const MRattlePlugin::BuiltPlatform& built : MRattlePlugin::BuiltPlatforms) {
             if (!built.device)
                 continue;
+            std::string path = built.pluginPath;
+            if (pluginDir != nullptr)
+                path = std::string(pluginDir) + "/" + path.substr(path.find_last_of('/') + 1);
             for (int i = 0; i < Platform::getNumPlatforms(); i++)
                 if (Platform::getPlatform(i).getName() == built.name)
-                    Platform::loadPluginLibrary(built.pluginPath);
+                    Platform::loadPluginLibrary(path);
         }
     });
 }
@@ -67,11 +73,43 @@ std::vector<std::string> devicePlatforms() {
     return names;
 }
 
+std::string unavailable(const std::string& name) {
+    if (!isDevicePlatform(name))  // a host platform: only whether OpenMM has it (an OpenMM built without CPU)
+        return havePlatform(name) ? "" : "OpenMM has no " + name + " platform here";
+    static std::mutex mutex;
+    static std::map<std::string, std::string> reasons;
+    std::lock_guard<std::mutex> lock(mutex);
+    if (reasons.count(name) == 0) {
+        std::string& reason = reasons[name];
+        if (!havePlatform(name)) {
+            // The platform's plugin did not load: say why (e.g. no libcuda.so.1 without a driver).
+            reason = "OpenMM has no " + name + " platform here";
+            for (const std::string& failure : Platform::getPluginLoadFailures())
+                if (failure.find("libOpenMM" + name) != std::string::npos)
+                    reason += " (" + failure + ")";
+        }
+        else {
+            // The platform loads without a device (CUDA with no GPU): a Context of one particle tells.
+            try {
+                System system;
+                system.addParticle(1.0);
+                VerletIntegrator integrator(0.001);
+                Context context(system, integrator, Platform::getPlatformByName(name));
+            }
+            catch (const std::exception& e) {
+                reason = "no " + name + " device: " + e.what();
+            }
+        }
+    }
+    return reasons[name];
+}
+
 std::vector<Config> configsOf(const std::string& integrator) {
     std::vector<Config> configs;
     for (const MRattlePlugin::BuiltPlatform& built : MRattlePlugin::BuiltPlatforms) {
-        // The device platforms run every integrator but the splitting baseline.
-        if (built.device && (integrator == "RigidSplitting" || !havePlatform(built.name)))
+        // The device platforms run every integrator but the splitting baseline. One that
+        // cannot run here (unavailable()) keeps its configs: their tests skip, saying why.
+        if (built.device && integrator == "RigidSplitting")
             continue;
         configs.push_back({built.name, integrator});
     }

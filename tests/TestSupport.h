@@ -39,6 +39,20 @@ std::vector<Config> configsOf(const std::string& integrator);
 std::vector<std::string> devicePlatforms();
 /** Whether a platform of the build's list is a device platform. */
 bool isDevicePlatform(const std::string& name);
+/**
+ * Why a platform of the build's list cannot run here ("" if it can): OpenMM has no such
+ * platform (its plugin did not load, or OpenMM was built without it), or a device platform
+ * has no device (CUDA without a GPU: found by making a Context of one particle, once per
+ * process).
+ */
+std::string unavailable(const std::string& name);
+/** In a test or SetUp(): skip, saying why, if the platform cannot run here. */
+#define MRATTLE_SKIP_IF_UNAVAILABLE(platformName)                                   \
+    do {                                                                          \
+        const std::string mrattleWhy = MRattleTest::unavailable(platformName);    \
+        if (!mrattleWhy.empty())                                                  \
+            GTEST_SKIP() << mrattleWhy;                                           \
+    } while (0)
 /** "Reference_MRattle": a test-name suffix. */
 std::string configName(const ::testing::TestParamInfo<Config>& info);
 /** The integrator of that kind (MRattleLangevin: 300 K, 1/ps, a fixed random seed). */
@@ -59,6 +73,9 @@ std::map<std::string, std::string> platformProperties(const std::string& platfor
 /** The fixture of the generic suites. */
 class RigidBodyTest : public ::testing::TestWithParam<Config> {
 protected:
+    void SetUp() override {
+        MRATTLE_SKIP_IF_UNAVAILABLE(GetParam().platform);
+    }
     std::unique_ptr<MRattlePlugin::RigidBodyIntegrator> makeIntegrator(double stepSize) const {
         return MRattleTest::makeIntegrator(GetParam().integrator, stepSize);
     }

@@ -35,8 +35,28 @@ def platform(request):
 @pytest.fixture(params=mrattle.DEVICE_PLATFORMS or [pytest.param(None, marks=pytest.mark.skip(
     reason='no device platform (OpenCL, CUDA) with the plugin\'s kernels in this OpenMM'))])
 def devicePlatform(request):
-    """Each device platform (OpenCL, CUDA) the plugin's kernels run on here."""
+    """Each device platform (OpenCL, CUDA) the plugin's kernels run on here; skipped, saying
+    why, where the platform has no device (CUDA without a GPU)."""
+    problem = _deviceProblem(request.param)
+    if problem:
+        pytest.skip(problem)
     return openmm.Platform.getPlatformByName(request.param)
+
+
+_deviceProblems = {}
+
+
+def _deviceProblem(name):
+    """Why a device platform cannot make a Context here (e.g. no CUDA device), or None: once per session."""
+    if name not in _deviceProblems:
+        _deviceProblems[name] = None
+        system = openmm.System()
+        system.addParticle(1.0)
+        try:
+            openmm.Context(system, openmm.VerletIntegrator(0.001), openmm.Platform.getPlatformByName(name))
+        except Exception as error:
+            _deviceProblems[name] = 'no %s device: %s' % (name, error)
+    return _deviceProblems[name]
 
 
 def platformProperties(platform):

@@ -1,0 +1,448 @@
+/*
+ * device_speed: M-RATTLE against OpenMM's own rigid water (SETTLE) on a device platform:
+ * CUDA on a GPU, or OpenCL (through pocl on a CPU only to check that it runs: --small).
+ * A C++ program so that it runs where there is no Python OpenMM (the lent GPU machine).
+ *
+ * For each size, a cubic box of n^3 rigid TIP3P waters (3 n^3 atoms, density 33.4 /nm^3,
+ * random orientations on a lattice) in two Systems with the same particles, constraints
+ * and positions:
+ *   pme    TIP3P charges and Lennard-Jones, PME, cutoff 0.9 nm: ns/day
+ *   bare   the only force a CustomExternalForce with a zero coefficient on one particle:
+ *          the integration's own cost per step (forces excluded)
+ * and four integrators (2 fs), each with its own Context in the given precision:
+ *   verlet_settle     OpenMM's VerletIntegrator; OpenMM applies SETTLE to the waters
+ *   mrattle           MRattleIntegrator, each water a declared rigid body
+ *   langevin_settle   OpenMM's LangevinMiddleIntegrator, 300 K, 1/ps, with SETTLE
+ *   mrattle_langevin  MRattleLangevinIntegrator, 300 K, 1/ps
+ * The four Contexts of one (size, System) are timed in interleaved batches (each about
+ * --batch-seconds long, ending with a download of the positions, whose own time is measured
+ * and subtracted), so their ratios see the same machine state; the median is reported.
+ * After the batches the largest error of the water geometry (O-H and H-H distances) and
+ * whether the state is finite are recorded.
+ *
+ * Usage: device_speed [--platform CUDA] [--precision mixed] [--waters-per-side 20,32,69]
+ *                     [--repeats 3] [--batch-seconds 0.5] [--warmup 50] [--budget SECONDS]
+ *                     [--plugins FILE[,FILE]] [--out FILE] [--ratios FILE] [--small]
+ * --small: 6 waters per side (648 atoms), 2 repeats of 0.2 s, 5 warm-up steps.
+ * --budget: a (size, System) group is not started once this many seconds have passed (it is
+ * named as skipped), so a run with a wall-clock limit still writes what it measured.
+ * --plugins: the plugin's device kernel libraries to load (default: those of this build).
+ * OpenMM's platforms come from OPENMM_PLUGIN_DIR, else the build's OpenMM plugin folder.
+ * Timings go to --out (default stdout), the targets to --ratios (default stderr), as CSV.
+ * Exit status 2 if a run diverged or lost its geometry, 3 if the platform or the plugin's
+ * kernels on it are not there, 4 if the budget left a group out.
+ */
+#include "MRattleBuildInfo.h"
+#include "MRattleIntegrator.h"
+#include "MRattleLangevinIntegrator.h"
+#include "OpenMM.h"
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdlib>
+#include <fstream>
+#include <iomanip>
+#include <iostream>
+#include <map>
+#include <memory>
+#include <random>
+#include <sstream>
+#include <string>
+#include <vector>
+
+using namespace OpenMM;
+using std::string;
+using std::vector;
+
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+struct Options {
+    string platform = "CUDA", precision = "mixed", out, ratios;
+    vector<int> watersPerSide = {20, 32, 69};  // 24,000, 98,304 and 985,527 atoms
+    vector<string> plugins;
+    int repeats = 3, warmup = 50;
+    double batchSeconds = 0.5, budget = 0;
+};
+
+vector<string> split(const string& text) {
+    vector<string> parts;
+    std::stringstream stream(text);
+    string part;
+    while (std::getline(stream, part, ','))
+        if (!part.empty())
+            parts.push_back(part);
+    return parts;
+}
+
+Options parse(int argc, char** argv) {
+    Options options;
+#ifdef MRATTLE_DEVICE_PLUGINS
+    options.plugins = split(MRATTLE_DEVICE_PLUGINS);
+#endif
+    for (int i = 1; i < argc; i++) {
+        string flag = argv[i];
+        if (flag == "--small") {
+            options.watersPerSide = {6};
+            options.repeats = 2;
+            options.batchSeconds = 0.2;
+            options.warmup = 5;
+            continue;
+        }
+        if (i + 1 >= argc)
+            throw std::runtime_error("device_speed: " + flag + " needs a value");
+        string value = argv[++i];
+        if (flag == "--platform")
+            options.platform = value;
+        else if (flag == "--precision")
+            options.precision = value;
+        else if (flag == "--waters-per-side") {
+            options.watersPerSide.clear();
+            for (const string& part : split(value))
+                options.watersPerSide.push_back(std::stoi(part));
+        }
+        else if (flag == "--repeats")
+            options.repeats = std::stoi(value);
+        else if (flag == "--batch-seconds")
+            options.batchSeconds = std::stod(value);
+        else if (flag == "--warmup")
+            options.warmup = std::stoi(value);
+        else if (flag == "--budget")
+            options.budget = std::stod(value);
+        else if (flag == "--plugins")
+            options.plugins = split(value);
+        else if (flag == "--out")
+            options.out = value;
+        else if (flag == "--ratios")
+            options.ratios = value;
+        else
+            throw std::runtime_error("device_speed: unknown option " + flag);
+    }
+    if (options.repeats < 1 || options.batchSeconds <= 0 || options.warmup < 1)
+        throw std::runtime_error("device_speed: --repeats and --warmup must be >= 1 and --batch-seconds > 0");
+    for (int n : options.watersPerSide)
+        if (n < 6)
+            throw std::runtime_error("device_speed: --waters-per-side must be >= 6 (the box must hold the 0.9 nm cutoff)");
+    return options;
+}
+
+// TIP3P (Jorgensen 1983): geometry, masses, charges, oxygen Lennard-Jones.
+const double OH = 0.09572, HOH = 104.52 * M_PI / 180, HH = 2 * OH * std::sin(HOH / 2);
+const double MassO = 15.9994, MassH = 1.008, ChargeO = -0.834, ChargeH = 0.417;
+const double SigmaO = 0.315061, EpsilonO = 0.636386;
+const double WatersPerNm3 = 33.43, Cutoff = 0.9, StepSize = 0.002;
+
+struct WaterBox {
+    int waters = 0;
+    double side = 0;  // nm
+    vector<Vec3> positions;
+};
+
+/** A uniformly random rotation (rows) from a unit quaternion. */
+vector<Vec3> randomRotation(std::mt19937& generator) {
+    std::normal_distribution<double> normal;
+    double q[4], norm = 0;
+    for (double& c : q) {
+        c = normal(generator);
+        norm += c * c;
+    }
+    for (double& c : q)
+        c /= std::sqrt(norm);
+    const double w = q[0], x = q[1], y = q[2], z = q[3];
+    return {Vec3(1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y)),
+            Vec3(2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x)),
+            Vec3(2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y))};
+}
+
+/**
+ * n^3 waters on a cubic lattice at liquid density, each in a random orientation; an
+ * orientation that brings a site within 0.17 nm of a site of an already placed neighbour
+ * (periodic) is redrawn, up to 50 times.
+ */
+WaterBox buildWaterBox(int n, unsigned int seed) {
+    WaterBox box;
+    box.waters = n * n * n;
+    box.side = std::cbrt(box.waters / WatersPerNm3);
+    const double spacing = box.side / n;
+    // The sites about the oxygen: H1 and H2 in the xy plane.
+    const vector<Vec3> local = {Vec3(0, 0, 0), Vec3(OH * std::sin(HOH / 2), OH * std::cos(HOH / 2), 0),
+                                Vec3(-OH * std::sin(HOH / 2), OH * std::cos(HOH / 2), 0)};
+    std::mt19937 generator(seed);
+    box.positions.resize(3 * box.waters);
+    auto index = [n](int i, int j, int k) { return ((i + n) % n) + n * (((j + n) % n) + n * ((k + n) % n)); };
+    vector<char> placed(box.waters, 0);
+    for (int k = 0; k < n; k++)
+        for (int j = 0; j < n; j++)
+            for (int i = 0; i < n; i++) {
+                const int w = index(i, j, k);
+                const Vec3 center((i + 0.5) * spacing, (j + 0.5) * spacing, (k + 0.5) * spacing);
+                for (int attempt = 0; attempt < 50; attempt++) {
+                    vector<Vec3> rotation = randomRotation(generator);
+                    for (int s = 0; s < 3; s++)
+                        box.positions[3 * w + s] = center + Vec3(rotation[0].dot(local[s]), rotation[1].dot(local[s]),
+                                                                 rotation[2].dot(local[s]));
+                    double closest = 1e10;
+                    for (int dk = -1; dk <= 1; dk++)
+                        for (int dj = -1; dj <= 1; dj++)
+                            for (int di = -1; di <= 1; di++) {
+                                const int other = index(i + di, j + dj, k + dk);
+                                if (other == w || !placed[other])
+                                    continue;
+                                for (int a = 0; a < 3; a++)
+                                    for (int b = 0; b < 3; b++) {
+                                        Vec3 d = box.positions[3 * w + a] - box.positions[3 * other + b];
+                                        for (int c = 0; c < 3; c++)
+                                            d[c] -= box.side * std::round(d[c] / box.side);
+                                        closest = std::min(closest, std::sqrt(d.dot(d)));
+                                    }
+                            }
+                    if (closest >= 0.17)
+                        break;
+                }
+                placed[w] = 1;
+            }
+    return box;
+}
+
+/** The waters' particles and constraints, and either TIP3P with PME or a negligible force. */
+std::unique_ptr<System> buildSystem(const WaterBox& box, bool pme) {
+    std::unique_ptr<System> system(new System());
+    system->setDefaultPeriodicBoxVectors(Vec3(box.side, 0, 0), Vec3(0, box.side, 0), Vec3(0, 0, box.side));
+    NonbondedForce* nonbonded = pme ? new NonbondedForce() : nullptr;
+    for (int w = 0; w < box.waters; w++) {
+        const int o = system->addParticle(MassO);
+        system->addParticle(MassH);
+        system->addParticle(MassH);
+        system->addConstraint(o, o + 1, OH);
+        system->addConstraint(o, o + 2, OH);
+        system->addConstraint(o + 1, o + 2, HH);
+        if (pme) {
+            nonbonded->addParticle(ChargeO, SigmaO, EpsilonO);
+            nonbonded->addParticle(ChargeH, 1, 0);
+            nonbonded->addParticle(ChargeH, 1, 0);
+            nonbonded->addException(o, o + 1, 0, 1, 0);
+            nonbonded->addException(o, o + 2, 0, 1, 0);
+            nonbonded->addException(o + 1, o + 2, 0, 1, 0);
+        }
+    }
+    if (pme) {
+        nonbonded->setNonbondedMethod(NonbondedForce::PME);
+        nonbonded->setCutoffDistance(Cutoff);
+        system->addForce(nonbonded);
+    }
+    else {
+        CustomExternalForce* negligible = new CustomExternalForce("0*x");
+        negligible->addParticle(0);
+        system->addForce(negligible);
+    }
+    return system;
+}
+
+std::unique_ptr<Integrator> makeIntegrator(const string& name, int waters) {
+    if (name == "verlet_settle")
+        return std::unique_ptr<Integrator>(new VerletIntegrator(StepSize));
+    if (name == "langevin_settle")
+        return std::unique_ptr<Integrator>(new LangevinMiddleIntegrator(300, 1, StepSize));
+    MRattlePlugin::RigidBodyIntegrator* rigid;
+    if (name == "mrattle")
+        rigid = new MRattlePlugin::MRattleIntegrator(StepSize);
+    else
+        rigid = new MRattlePlugin::MRattleLangevinIntegrator(300, 1, StepSize);
+    for (int w = 0; w < waters; w++)
+        rigid->addRigidBody({3 * w, 3 * w + 1, 3 * w + 2});
+    return std::unique_ptr<Integrator>(rigid);
+}
+
+/** One timed configuration: its own System, Integrator and Context. */
+struct Run {
+    string name;
+    std::unique_ptr<Integrator> integrator;
+    std::unique_ptr<Context> context;
+    int steps = 0;
+    vector<double> secondsPerStep;
+};
+
+double seconds(Clock::time_point since) {
+    return std::chrono::duration<double>(Clock::now() - since).count();
+}
+
+/** Time to download the positions alone (the synchronisation ending each batch). */
+double syncSeconds(Context& context) {
+    context.getState(State::Positions);
+    vector<double> times;
+    for (int i = 0; i < 3; i++) {
+        Clock::time_point start = Clock::now();
+        context.getState(State::Positions);
+        times.push_back(seconds(start));
+    }
+    return *std::min_element(times.begin(), times.end());
+}
+
+/** Seconds per step over a batch of steps, ended by a download of the positions. */
+double timeBatch(Run& run, int steps, double sync) {
+    Clock::time_point start = Clock::now();
+    run.integrator->step(steps);
+    run.context->getState(State::Positions);
+    return std::max(0.0, seconds(start) - sync) / steps;
+}
+
+double median(vector<double> values) {
+    std::sort(values.begin(), values.end());
+    size_t n = values.size();
+    return n % 2 == 1 ? values[n / 2] : 0.5 * (values[n / 2 - 1] + values[n / 2]);
+}
+
+/** Largest error (nm) of any O-H or H-H distance, or infinity if a position is not finite. */
+double geometryError(const vector<Vec3>& positions) {
+    double worst = 0;
+    for (size_t o = 0; o + 2 < positions.size(); o += 3) {
+        const double lengths[3] = {OH, OH, HH};
+        const int pairs[3][2] = {{0, 1}, {0, 2}, {1, 2}};
+        for (int p = 0; p < 3; p++) {
+            Vec3 d = positions[o + pairs[p][0]] - positions[o + pairs[p][1]];
+            double error = std::fabs(std::sqrt(d.dot(d)) - lengths[p]);
+            if (!std::isfinite(error))
+                return INFINITY;
+            worst = std::max(worst, error);
+        }
+    }
+    return worst;
+}
+
+bool havePlatform(const string& name) {
+    for (int i = 0; i < Platform::getNumPlatforms(); i++)
+        if (Platform::getPlatform(i).getName() == name)
+            return true;
+    return false;
+}
+
+} // namespace
+
+int main(int argc, char** argv) {
+    try {
+        Options options = parse(argc, argv);
+        const Clock::time_point begin = Clock::now();
+        // OpenMM's platforms: OPENMM_PLUGIN_DIR, else those of the OpenMM this was built against.
+        setenv("OPENMM_PLUGIN_DIR", MRATTLE_OPENMM_PLUGIN_DIR, 0);
+        Platform::loadPluginsFromDirectory(Platform::getDefaultPluginsDirectory());
+        for (const string& failure : Platform::getPluginLoadFailures())
+            std::cerr << "device_speed: an OpenMM plugin did not load: " << failure << "\n";
+        for (const string& plugin : options.plugins) {
+            try {
+                Platform::loadPluginLibrary(plugin);
+            }
+            catch (const std::exception& e) {
+                std::cerr << "device_speed: the kernel plugin " << plugin << " did not load: " << e.what() << "\n";
+            }
+        }
+        if (!havePlatform(options.platform)) {
+            std::cerr << "device_speed: OpenMM " << Platform::getOpenMMVersion() << " has no " << options.platform
+                      << " platform here (see the plugin load failures above)\n";
+            return 3;
+        }
+        Platform& platform = Platform::getPlatformByName(options.platform);
+        if (!platform.supportsKernels({"IntegrateMRattleStep", "IntegrateMRattleLangevinStep"})) {
+            std::cerr << "device_speed: the plugin's kernels are not registered on " << options.platform
+                      << " (give their library with --plugins)\n";
+            return 3;
+        }
+        std::ofstream outFile, ratioFile;
+        if (!options.out.empty())
+            outFile.open(options.out);
+        if (!options.ratios.empty())
+            ratioFile.open(options.ratios);
+        std::ostream& out = options.out.empty() ? std::cout : outFile;
+        std::ostream& ratios = options.ratios.empty() ? std::cerr : ratioFile;
+        out << "platform,device,precision,system,waters,atoms,integrator,steps_per_batch,batches,sync_ms,"
+               "median_ms_per_step,min_ms_per_step,max_ms_per_step,ns_per_day,geometry_error_nm,finite\n";
+        ratios << "system,atoms,measure,value,target,met\n";
+        const vector<string> names = {"verlet_settle", "mrattle", "langevin_settle", "mrattle_langevin"};
+        bool allGood = true, skipped = false;
+        string device = "?";
+        std::cerr << "device_speed: OpenMM " << Platform::getOpenMMVersion() << ", " << options.platform << ", "
+                  << options.precision << " precision\n";
+        for (int n : options.watersPerSide) {
+            WaterBox box = buildWaterBox(n, 1234 + n);
+            for (bool pme : {false, true}) {
+                const string systemName = pme ? "pme" : "bare";
+                const int atoms = 3 * box.waters;
+                if (options.budget > 0 && seconds(begin) > options.budget) {
+                    std::cerr << "device_speed: skipped " << systemName << " at " << atoms << " atoms: the budget of "
+                              << options.budget << " s is spent\n";
+                    skipped = true;
+                    continue;
+                }
+                std::unique_ptr<System> system = buildSystem(box, pme);
+                vector<Run> runs;
+                for (const string& name : names) {
+                    Run run;
+                    run.name = name;
+                    run.integrator = makeIntegrator(name, box.waters);
+                    Clock::time_point start = Clock::now();
+                    run.context.reset(new Context(*system, *run.integrator, platform, {{"Precision", options.precision}}));
+                    run.context->setPositions(box.positions);
+                    run.context->setVelocitiesToTemperature(300, 1);
+                    try {
+                        device = platform.getPropertyValue(*run.context, "DeviceName");
+                    }
+                    catch (const OpenMMException&) {
+                    }
+                    std::cerr << "device_speed: " << systemName << ", " << atoms << " atoms, " << name
+                              << ": Context in " << std::setprecision(3) << seconds(start) << " s\n";
+                    runs.push_back(std::move(run));
+                }
+                // Warm up, then size each batch to about batchSeconds (whole hundreds of steps
+                // when that many: M-RATTLE reads its failure flag every 100 steps).
+                vector<double> sync;
+                for (Run& run : runs) {
+                    run.integrator->step(options.warmup);
+                    sync.push_back(syncSeconds(*run.context));
+                    double perStep = std::max(1e-7, timeBatch(run, options.warmup, sync.back()));
+                    int steps = std::max(10, (int) (options.batchSeconds / perStep));
+                    run.steps = steps >= 200 ? 100 * (steps / 100) : steps;
+                }
+                for (int r = 0; r < options.repeats; r++)
+                    for (size_t i = 0; i < runs.size(); i++)
+                        runs[i].secondsPerStep.push_back(timeBatch(runs[i], runs[i].steps, sync[i]));
+                std::map<string, double> medianSeconds;
+                for (size_t i = 0; i < runs.size(); i++) {
+                    Run& run = runs[i];
+                    const double m = median(run.secondsPerStep);
+                    medianSeconds[run.name] = m;
+                    auto range = std::minmax_element(run.secondsPerStep.begin(), run.secondsPerStep.end());
+                    State state = run.context->getState(State::Positions | State::Energy);
+                    const double error = geometryError(state.getPositions());
+                    const bool finite = std::isfinite(state.getKineticEnergy() + state.getPotentialEnergy()) &&
+                                        std::isfinite(error);
+                    // SETTLE holds the geometry to OpenMM's tolerance; M-RATTLE to round-off.
+                    if (!finite || error > 1e-4)
+                        allGood = false;
+                    out << options.platform << ",\"" << device << "\"," << options.precision << "," << systemName
+                        << "," << box.waters << "," << atoms << "," << run.name << "," << run.steps << ","
+                        << options.repeats << "," << std::setprecision(4) << 1e3 * sync[i] << "," << 1e3 * m << ","
+                        << 1e3 * *range.first << "," << 1e3 * *range.second << ","
+                        << (m > 0 ? StepSize * 1e-3 * 86400 / m : INFINITY) << "," << std::setprecision(3) << error
+                        << "," << (finite ? "yes" : "no") << std::endl;
+                }
+                // The targets: integration (bare) at most 1.2x SETTLE's time; ns/day with PME at
+                // least 0.95x OpenMM's (time ratio at most 1/0.95).
+                for (const auto& pair : {std::make_pair("mrattle", "verlet_settle"),
+                                         std::make_pair("mrattle_langevin", "langevin_settle")}) {
+                    const double ratio = medianSeconds[pair.first] / medianSeconds[pair.second];
+                    const string measure = string(pair.first) + (pme ? " ns/day over " : " time per step over ") + pair.second;
+                    const double value = pme ? 1 / ratio : ratio;
+                    const bool met = pme ? value >= 0.95 : value <= 1.2;
+                    ratios << systemName << "," << atoms << "," << measure << "," << std::setprecision(3) << value
+                           << "," << (pme ? ">= 0.95" : "<= 1.2") << "," << (met ? "yes" : "no") << std::endl;
+                }
+            }
+        }
+        std::cerr << "device_speed: done in " << std::setprecision(4) << seconds(begin) << " s on " << device << "\n";
+        return !allGood ? 2 : skipped ? 4 : 0;
+    }
+    catch (const std::exception& e) {
+        std::cerr << "device_speed: " << e.what() << "\n";
+        return 1;
+    }
+}
