@@ -25,7 +25,7 @@ def parseArguments():
     parser.add_argument('--steps', type=int, default=5000, help='number of steps (default 5000)')
     parser.add_argument('--step-size', type=float, default=2.0, help='step size in fs (default 2)')
     parser.add_argument('--temperature', type=float, default=250.0, help='initial temperature in K (default 250)')
-    parser.add_argument('--platform', default='CPU', choices=['CPU', 'Reference'], help='OpenMM platform (default CPU)')
+    parser.add_argument('--platform', default='CPU', choices=mrattle.PLATFORMS, help='OpenMM platform (default CPU)')
     parser.add_argument('--threads', type=int, default=0, help='CPU threads (default: all cores)')
     parser.add_argument('--report-interval', type=int, default=50, help='steps between reports (default 50)')
     parser.add_argument('--seed', type=int, default=1, help='random seed of orientations and velocities')

@@ -23,7 +23,7 @@ parser.add_argument('--steps', type=int, default=2000, help='number of steps (de
 parser.add_argument('--step-size', type=float, default=2.0, help='fs (default 2)')
 parser.add_argument('--temperature', type=float, default=298.0, help='K (default 298)')
 parser.add_argument('--pressure', type=float, default=1.0, help='bar (default 1)')
-parser.add_argument('--platform', default='CPU', choices=['CPU', 'Reference'])
+parser.add_argument('--platform', default='CPU', choices=mrattle.PLATFORMS)
 parser.add_argument('--output', default='output', help='output folder (default ./output)')
 arguments = parser.parse_args()
 os.makedirs(arguments.output, exist_ok=True)

@@ -29,7 +29,7 @@ parser = argparse.ArgumentParser(description=__doc__.split('\n')[0])
 parser.add_argument('--steps', type=int, default=2000, help='steps of each model (default 2000)')
 parser.add_argument('--step-size', type=float, default=1.0, help='fs (default 1)')
 parser.add_argument('--temperature', type=float, default=300.0, help='K of the starting velocities (default 300)')
-parser.add_argument('--platform', default='CPU', choices=['CPU', 'Reference', 'OpenCL'])
+parser.add_argument('--platform', default='CPU', choices=mrattle.PLATFORMS)
 arguments = parser.parse_args()
 if arguments.steps <= 0 or arguments.step_size <= 0:
     parser.error('steps and step size must be positive')

@@ -24,7 +24,7 @@ parser.add_argument('--steps', type=int, default=500, help='NVE steps (default 5
 parser.add_argument('--equilibration', type=int, default=200, help='thermostatted steps first (default 200)')
 parser.add_argument('--step-size', type=float, default=2.0, help='fs (default 2)')
 parser.add_argument('--temperature', type=float, default=300.0, help='K (default 300)')
-parser.add_argument('--platform', default='CPU', choices=['CPU', 'Reference'])
+parser.add_argument('--platform', default='CPU', choices=mrattle.PLATFORMS)
 parser.add_argument('--output', default='output', help='output folder (default ./output)')
 arguments = parser.parse_args()
 os.makedirs(arguments.output, exist_ok=True)

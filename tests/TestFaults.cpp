@@ -26,28 +26,7 @@ using std::vector;
 namespace {
 
 /** allConfigs() and MRattleLangevin on every platform, each once. */
-vector<Config> everyIntegrator() {
-    vector<Config> configs = allConfigs();
-    std::set<string> seen;
-    for (const Config& c : configs)
-        seen.insert(c.platform + "/" + c.integrator);
-    for (const Config& c : configsOf("MRattleLangevin"))
-        if (seen.insert(c.platform + "/" + c.integrator).second)
-            configs.push_back(c);
-    return configs;
-}
-
-/** The same, Reference and CPU only (see the comment where used). */
-vector<Config> hostIntegrators() {
-    vector<Config> configs;
-    for (const Config& c : everyIntegrator())
-        if (c.platform != "OpenCL")
-            configs.push_back(c);
-    return configs;
-}
-
 class Faults : public RigidBodyTest {};
-class HostFaults : public RigidBodyTest {};
 
 struct Snapshot {
     vector<Vec3> positions, velocities;
@@ -115,8 +94,8 @@ System wallSystem() {
 
 } // namespace
 
-// Item 1. OpenCL: the lead's device-side end-of-step check is not merged yet.
-TEST_P(HostFaults, ForcesThatAreNotFiniteAtTheNewPositionsAreRefused) {
+// Item 1.
+TEST_P(Faults, ForcesThatAreNotFiniteAtTheNewPositionsAreRefused) {
     System system = wallSystem();
     std::unique_ptr<RigidBodyIntegrator> integrator = makeIntegrator(0.01);
     std::unique_ptr<Context> context = makeContext(system, *integrator);
@@ -141,8 +120,8 @@ TEST_P(Faults, AStepSizeWhoseInverseIsNotFiniteIsRefused) {
     expectSame(before, snapshot(*context), "tiny step");
 }
 
-// Item 2. OpenCL: the device checks its own free constraints (the lead's part).
-TEST_P(HostFaults, AFreeConstraintThatDoesNotConvergeIsRefused) {
+// Item 2.
+TEST_P(Faults, AFreeConstraintThatDoesNotConvergeIsRefused) {
     System system;
     for (double m : {12.0, 12.0, 16.0, 1.0, 1.0})
         system.addParticle(m);
@@ -292,8 +271,7 @@ TEST_P(Faults, NearLinearMoleculesFromThreeDecimalCoordinatesStepAtTwoFemtosecon
 }
 
 // Item 8: bodies a micrometre of a nanometre across, or with coinciding atoms, are points.
-// OpenCL: its device arithmetic still rotates a point that is not exactly one (the lead's part).
-TEST_P(HostFaults, TinyBodiesArePointsAndStepAtTwoFemtoseconds) {
+TEST_P(Faults, TinyBodiesArePointsAndStepAtTwoFemtoseconds) {
     System system;
     vector<Vec3> positions;
     std::unique_ptr<RigidBodyIntegrator> integrator = makeIntegrator(0.002);
@@ -339,8 +317,7 @@ TEST_P(Faults, ACollinearWaterHasTheSameShapeOnEveryPlatform) {
     EXPECT_EQ(0.0, maxDeviation(snapshot(referenceContext).positions, snapshot(*context).positions));
 }
 
-INSTANTIATE_TEST_SUITE_P(AllConfigs, Faults, ::testing::ValuesIn(everyIntegrator()), configName);
-INSTANTIATE_TEST_SUITE_P(HostConfigs, HostFaults, ::testing::ValuesIn(hostIntegrators()), configName);
+INSTANTIATE_TEST_SUITE_P(AllConfigs, Faults, ::testing::ValuesIn(allConfigs()), configName);
 
 // Item 8, the rule itself: a 1e-3 nm kink in CO2 is linear, a 5-degree bend is not.
 TEST(FaultsCore, NearLinearThreshold) {

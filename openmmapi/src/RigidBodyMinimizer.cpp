@@ -1,4 +1,5 @@
 #include "RigidBodyMinimizer.h"
+#include "MRattlePlatforms.h"
 #include "RigidBodyIntegrator.h"
 #include "mrattle/RigidBodyMath.h"
 #include "openmm/CompoundIntegrator.h"
@@ -90,8 +91,11 @@ public:
         : context(context), system(context.getSystem()), topology(integrator.getTopology()),
           tolerance(tolerance), maxIterations(maxIterations) {
         groups = context.getIntegrator().getIntegrationForceGroups();
+        // The device platforms (OpenMM's common compute platforms) sum forces in fixed point.
         const std::string platform = context.getPlatform().getName();
-        clipsLargeForces = platform == "OpenCL" || platform == "CUDA" || platform == "HIP";
+        clipsLargeForces = false;
+        for (const BuiltPlatform& built : BuiltPlatforms)
+            clipsLargeForces |= (built.device && platform == built.name);
         workingConstraintTolerance = std::max(1e-4, integrator.getConstraintTolerance());
         springConstant = 100 / workingConstraintTolerance;
     }

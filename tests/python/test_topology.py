@@ -87,7 +87,7 @@ def test_waters_take_their_force_field_geometry(platformName, pdbName, forceFiel
     system = app.ForceField(forceFieldName).createSystem(pdb.topology, nonbondedMethod=app.PME,
                                                          nonbondedCutoff=0.7*unit.nanometers, rigidWater=True)
     integrator = mrattle.MRattleIntegrator(2*unit.femtoseconds)
-    properties = {'Precision': 'double'} if platformName == 'OpenCL' else {}
+    properties = {'Precision': 'double'} if platformName in mrattle.DEVICE_PLATFORMS else {}
     context = openmm.Context(system, integrator, openmm.Platform.getPlatformByName(platformName), properties)
     context.setPositions(pdb.positions)
     context.setVelocitiesToTemperature(300*unit.kelvin, 1)

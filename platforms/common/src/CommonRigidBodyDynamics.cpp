@@ -454,9 +454,10 @@ void CommonRigidBodyDynamics::updateShapes(ContextImpl& context) {
         context.getPositions(positions);
     }
     shapes = HostRigidBodyRules::classifyShapes(bodies, positions);
+    // The device's shape codes (kernels/bodyMath.cc): 0 general, 1 linear, 2 a point (no rotation).
     vector<int> flags(std::max(1, numBodies), 0);
     for (int b = 0; b < numBodies; b++)
-        flags[b] = (shapes[b] != RigidBodyMath::Shape::General);  // a point takes the linear arithmetic
+        flags[b] = (shapes[b] == RigidBodyMath::Shape::General ? 0 : shapes[b] == RigidBodyMath::Shape::Linear ? 1 : 2);
     bodyLinear.upload(flags);
 }
 

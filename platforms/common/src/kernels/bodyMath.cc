@@ -12,6 +12,11 @@
  * at the end of every step and puts back the state from before that step.
  */
 
+/* A body's shape, as the host classifies it when positions are set (bodyLinear[body]). */
+#define SHAPE_GENERAL 0
+#define SHAPE_LINEAR 1
+#define SHAPE_POINT 2  /* only translates: no rotation is solved or kept */
+
 typedef struct {
     mixed m00, m01, m02, m10, m11, m12, m20, m21, m22;
 } Matrix3;

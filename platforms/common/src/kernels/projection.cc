@@ -38,7 +38,10 @@ DEVICE RigidMotion rigidMotion(int start, int end, GLOBAL const int* RESTRICT bo
     }
     motion.omega = make_mixed3(0, 0, 0);
     const mixed j = J.m00 + J.m11 + J.m22;
-    if (linear != 0) {
+    if (linear == SHAPE_POINT) {
+        // A point only translates.
+    }
+    else if (linear == SHAPE_LINEAR) {
         if (farthest > 0 && j > 0) {
             u *= 1/sqrt(farthest);
             motion.omega = (L - dot(L, u)*u)*(1/j);

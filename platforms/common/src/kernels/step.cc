@@ -48,8 +48,8 @@ KERNEL void resetBodies(int numBodies, GLOBAL const int* RESTRICT bodyStart, GLO
             recordFailure(failure);
             continue;
         }
-        Matrix3 delta;
-        const bool converged = (bodyLinear[body] == 0 ?
+        Matrix3 delta = zeroMatrix();
+        const bool converged = bodyLinear[body] == SHAPE_POINT || (bodyLinear[body] == SHAPE_GENERAL ?
                 solveBodyRotation(start, end, bodyAtoms, posq, posqCorrection, newVelocity, origin, center, V, h,
                                   &delta) :
                 solveLinearBodyRotation(start, end, bodyAtoms, posq, posqCorrection, newVelocity, origin, center, V,

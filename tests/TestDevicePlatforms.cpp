@@ -1,12 +1,14 @@
 /*
- * M-RATTLE on OpenMM's OpenCL platform (through pocl on a machine without a GPU), in each
+ * M-RATTLE on each device platform of the build's list (OpenCL, here through pocl on a
+ * machine without a GPU; CUDA where built and a device is present), in each
  * precision mode, against the Reference platform: the 27-benzene cluster and a rigid
  * water box after 100 steps, rigidity and energy conservation over long runs, checkpoints,
  * virtual sites, free constrained particles next to bodies, a failed step. pocl compiles
- * kernels slowly, so the tests create few Contexts. Skipped where the OpenCL kernels were
- * not built or no OpenCL device is present.
+ * kernels slowly, so the tests create few Contexts. A platform OpenMM lacks here, or
+ * without a device, is skipped, saying why.
  */
 #include "TestSupport.h"
+#include "MRattlePlatforms.h"
 #include <gtest/gtest.h>
 #include <chrono>
 #include <cmath>
@@ -21,20 +23,27 @@ using std::vector;
 
 namespace {
 
-bool haveOpenCL() {
-    for (const string& name : devicePlatforms())
-        if (name == "OpenCL")
-            return true;
-    return false;
+/** Every device platform of the build's list (those OpenMM lacks here are skipped, saying why). */
+vector<string> builtDevicePlatforms() {
+    vector<string> names;
+    for (const MRattlePlugin::BuiltPlatform& built : MRattlePlugin::BuiltPlatforms)
+        if (built.device)
+            names.push_back(built.name);
+    return names;
 }
 
-#define REQUIRE_OPENCL()                                                                   \
-    if (!haveOpenCL())                                                                     \
-        GTEST_SKIP() << "no OpenCL: the OpenCL kernels were not built or no device is present";
+/** The suite runs once per device platform. */
+class DevicePlatform : public ::testing::TestWithParam<string> {
+protected:
+    void SetUp() override {
+        MRATTLE_SKIP_IF_UNAVAILABLE(GetParam());
+    }
+};
 
-std::unique_ptr<Context> openclContext(const System& system, Integrator& integrator, const string& precision) {
+std::unique_ptr<Context> deviceContext(const string& platformName, const System& system, Integrator& integrator,
+                                       const string& precision) {
     return std::unique_ptr<Context>(
-        new Context(system, integrator, platform("OpenCL"), {{"Precision", precision}}));
+        new Context(system, integrator, platform(platformName), {{"Precision", precision}}));
 }
 
 /** Positions after steps on a platform from a given rigid start. */
@@ -42,8 +51,8 @@ vector<Vec3> run(const System& system, const State& start, int steps, const stri
                  const string& precision = "") {
     MRattleIntegrator integrator(0.002);
     std::unique_ptr<Context> context;
-    if (platformName == "OpenCL")
-        context = openclContext(system, integrator, precision);
+    if (isDevicePlatform(platformName))
+        context = deviceContext(platformName, system, integrator, precision);
     else
         context.reset(new Context(system, integrator, platform(platformName)));
     context->setState(start);
@@ -87,7 +96,7 @@ vector<Vec3> settleRun(const State& start, const string& platformName, Nonbonded
             }
     VerletIntegrator integrator(0.002);
     integrator.setConstraintTolerance(1e-10);
-    std::unique_ptr<Context> context = (platformName == "OpenCL" ? openclContext(*c.system, integrator, "double")
+    std::unique_ptr<Context> context = (isDevicePlatform(platformName) ? deviceContext(platformName, *c.system, integrator, "double")
                                                                  : std::unique_ptr<Context>(new Context(*c.system, integrator, platform(platformName))));
     context->setState(start);
     integrator.step(100);
@@ -105,47 +114,44 @@ State rigidStart(const Cluster& c) {
 
 } // namespace
 
-TEST(OpenCL, DoublePrecisionAgreesWithReference) {
-    REQUIRE_OPENCL();
+TEST_P(DevicePlatform, DoublePrecisionAgreesWithReference) {
     for (const string model : {"27 benzenes"}) {
         Cluster c = buildCluster(benzene(), 3, 0.7, 1);
         State start = rigidStart(c);
-        vector<Vec3> opencl = run(*c.system, start, 100, "OpenCL", "double");
+        vector<Vec3> opencl = run(*c.system, start, 100, GetParam(), "double");
         vector<Vec3> reference = run(*c.system, start, 100, "Reference");
         double difference = maxDeviation(opencl, reference);
-        std::cout << model << ", 100 steps of 2 fs: OpenCL (double) vs Reference " << difference << " nm" << std::endl;
+        std::cout << model << ", 100 steps of 2 fs: " << GetParam() << " (double) vs Reference " << difference << " nm" << std::endl;
         EXPECT_GT(maxDeviation(start.getPositions(), reference), 1e-3) << model;  // they moved
         EXPECT_LT(difference, 1e-8) << model;
         EXPECT_LT(maxDistanceChange(start.getPositions(), opencl, c.molecules), 1e-10) << model;
     }
 }
 
-TEST(OpenCL, WaterBoxAgreesWithReferenceAsVerletWithSettleDoes) {
+TEST_P(DevicePlatform, WaterBoxAgreesWithReferenceAsVerletWithSettleDoes) {
     // Light, fast waters amplify the platforms' force differences (PME, or the order of
     // sums without cutoff) within 100 steps, so the yardstick is OpenMM's own
     // VerletIntegrator with SETTLE on the same box and start.
-    REQUIRE_OPENCL();
     for (auto method : {NonbondedForce::PME, NonbondedForce::NoCutoff}) {
         const string name = (method == NonbondedForce::PME ? "PME" : "no cutoff");
         Cluster c = waterBox(method);
         State start = rigidStart(c);
         const double mrattle =
-            maxDeviation(run(*c.system, start, 100, "OpenCL", "double"), run(*c.system, start, 100, "Reference"));
-        const double settle = maxDeviation(settleRun(start, "OpenCL", method), settleRun(start, "Reference", method));
-        std::cout << "64 TIP3P waters, " << name << ", 100 steps of 2 fs, OpenCL (double) vs Reference: M-RATTLE "
+            maxDeviation(run(*c.system, start, 100, GetParam(), "double"), run(*c.system, start, 100, "Reference"));
+        const double settle = maxDeviation(settleRun(start, GetParam(), method), settleRun(start, "Reference", method));
+        std::cout << "64 TIP3P waters, " << name << ", 100 steps of 2 fs, " << GetParam() << " (double) vs Reference: M-RATTLE "
                   << mrattle << " nm, VerletIntegrator with SETTLE " << settle << " nm" << std::endl;
         EXPECT_GT(settle, 0.0) << name;
         EXPECT_LT(mrattle, 3 * settle) << name;
     }
 }
 
-TEST(OpenCL, MixedPrecisionAgreesAndStaysRigid) {
-    REQUIRE_OPENCL();
+TEST_P(DevicePlatform, MixedPrecisionAgreesAndStaysRigid) {
     Cluster c = buildCluster(benzene(), 3, 0.7, 1);
     State start = rigidStart(c);
     vector<Vec3> reference100 = run(*c.system, start, 100, "Reference");
     MRattleIntegrator integrator(0.002);
-    std::unique_ptr<Context> context = openclContext(*c.system, integrator, "mixed");
+    std::unique_ptr<Context> context = deviceContext(GetParam(), *c.system, integrator, "mixed");
     context->setState(start);
     // OpenMM stores mixed-precision positions at its own precision: rigidity is measured
     // from the positions the Context reports, not the double-precision ones set.
@@ -154,17 +160,16 @@ TEST(OpenCL, MixedPrecisionAgreesAndStaysRigid) {
     const double difference = maxDeviation(context->getState(State::Positions).getPositions(), reference100);
     integrator.step(9900);
     const double rigidity = maxDistanceChange(stored, context->getState(State::Positions).getPositions(), c.molecules);
-    std::cout << "27 benzenes, OpenCL mixed: " << difference << " nm from Reference after 100 steps; rigidity "
+    std::cout << "27 benzenes, " << GetParam() << " mixed: " << difference << " nm from Reference after 100 steps; rigidity "
               << rigidity << " nm after 10,000 steps of 2 fs" << std::endl;
     EXPECT_LT(difference, 1e-4);
     EXPECT_LT(rigidity, 1e-6);
 }
 
-TEST(OpenCL, MixedPrecisionConservesEnergyLikeReference) {
+TEST_P(DevicePlatform, MixedPrecisionConservesEnergyLikeReference) {
     // The NVE energy fluctuation of one chaotic trajectory is itself noisy: two Reference
     // runs whose starts differ by 1e-9 nm differ by ~20% over 10,000 steps. So each
     // platform runs 4 independent starts, and the means are compared with their errors.
-    REQUIRE_OPENCL();
     Cluster c = buildCluster(benzene(), 3, 0.7, 1);
     const int starts = 4;
     vector<double> fluctuation[2];
@@ -177,7 +182,7 @@ TEST(OpenCL, MixedPrecisionConservesEnergyLikeReference) {
         for (int p = 0; p < 2; p++) {
             MRattleIntegrator integrator(0.002);
             std::unique_ptr<Context> context = (p == 0 ? std::unique_ptr<Context>(new Context(*c.system, integrator, platform("Reference")))
-                                                       : openclContext(*c.system, integrator, "mixed"));
+                                                       : deviceContext(GetParam(), *c.system, integrator, "mixed"));
             context->setState(start);
             integrator.step(100);
             fluctuation[p].push_back(standardDeviation(energySeries(*context, integrator, 50, 80)));
@@ -189,24 +194,23 @@ TEST(OpenCL, MixedPrecisionConservesEnergyLikeReference) {
     const double ratio = mixed / reference;
     const double ratioError = ratio * std::sqrt(std::pow(referenceError / reference, 2) + std::pow(mixedError / mixed, 2));
     std::cout << "27 benzenes, NVE energy fluctuation over 4,000 steps of 2 fs, mean of " << starts
-              << " starts: Reference " << reference << " +- " << referenceError << ", OpenCL mixed " << mixed << " +- "
+              << " starts: Reference " << reference << " +- " << referenceError << ", " << GetParam() << " mixed " << mixed << " +- "
               << mixedError << " kJ/mol; ratio " << ratio << " +- " << ratioError << std::endl;
     EXPECT_GT(reference, 0.0);
     // Within 10% of Reference's, or within what the runs can resolve (3 standard errors).
     EXPECT_LT(std::fabs(ratio - 1), std::max(0.1, 3 * ratioError));
 }
 
-TEST(OpenCL, SinglePrecisionRunsAndIsMeasured) {
-    REQUIRE_OPENCL();
+TEST_P(DevicePlatform, SinglePrecisionRunsAndIsMeasured) {
     Cluster c = buildCluster(benzene(), 3, 0.7, 1);
     State start = rigidStart(c);
     MRattleIntegrator integrator(0.002);
-    std::unique_ptr<Context> context = openclContext(*c.system, integrator, "single");
+    std::unique_ptr<Context> context = deviceContext(GetParam(), *c.system, integrator, "single");
     context->setState(start);
     const vector<Vec3> stored = context->getState(State::Positions).getPositions();
     vector<double> energies = energySeries(*context, integrator, 100, 100);
     const double rigidity = maxDistanceChange(stored, context->getState(State::Positions).getPositions(), c.molecules);
-    std::cout << "27 benzenes, OpenCL single, 10,000 steps of 2 fs: rigidity " << rigidity << " nm, energy fluctuation "
+    std::cout << "27 benzenes, " << GetParam() << " single, 10,000 steps of 2 fs: rigidity " << rigidity << " nm, energy fluctuation "
               << standardDeviation(energies) << " kJ/mol, drift " << linearSlope(energies) * energies.size()
               << " kJ/mol" << std::endl;
     for (double energy : energies)
@@ -214,16 +218,15 @@ TEST(OpenCL, SinglePrecisionRunsAndIsMeasured) {
     EXPECT_LT(rigidity, 1e-3);  // single precision: documented as measured, bounded loosely here
 }
 
-TEST(OpenCL, CheckpointRestartIsBitForBit) {
+TEST_P(DevicePlatform, CheckpointRestartIsBitForBit) {
     // With an Andersen thermostat (random numbers and body collisions) in double and mixed
     // precision, without a cutoff. (With PME and the thermostat the continued run has been
     // seen to differ at round-off: docs/platforms.md.)
-    REQUIRE_OPENCL();
     for (const string precision : {"mixed", "double"}) {
         Cluster c = waterBox(NonbondedForce::NoCutoff);
         c.system->addForce(new AndersenThermostat(300, 20.0));
         MRattleIntegrator integrator(0.002);
-        std::unique_ptr<Context> context = openclContext(*c.system, integrator, precision);
+        std::unique_ptr<Context> context = deviceContext(GetParam(), *c.system, integrator, precision);
         context->setState(rigidStart(c));
         integrator.step(20);
         std::stringstream checkpoint;
@@ -243,8 +246,7 @@ TEST(OpenCL, CheckpointRestartIsBitForBit) {
     }
 }
 
-TEST(OpenCL, FreeConstrainedParticlesBesideBodies) {
-    REQUIRE_OPENCL();
+TEST_P(DevicePlatform, FreeConstrainedParticlesBesideBodies) {
     // 27 tetrahedral molecules: 14 declared rigid, the other 13 free with their four bonds
     // to the centre constrained (RATTLE clusters on the device) and no other constraint.
     Cluster c = buildCluster(tetrahedral(), 3, 0.5, 6);
@@ -270,12 +272,12 @@ TEST(OpenCL, FreeConstrainedParticlesBesideBodies) {
         start = context.getState(State::Positions | State::Velocities);
     }
     vector<vector<Vec3> > results;
-    for (const string name : {"Reference", "OpenCL"}) {
+    for (const string name : {string("Reference"), GetParam()}) {
         MRattleIntegrator integrator(0.001);
         integrator.setConstraintTolerance(1e-8);
         for (const vector<int>& body : rigid)
             integrator.addRigidBody(body);
-        std::unique_ptr<Context> context = (name == "OpenCL" ? openclContext(*c.system, integrator, "double")
+        std::unique_ptr<Context> context = (isDevicePlatform(name) ? deviceContext(name, *c.system, integrator, "double")
                                                              : std::unique_ptr<Context>(new Context(*c.system, integrator, platform(name))));
         context->setState(start);
         EXPECT_EQ(14, integrator.getNumBodiesInEffect());
@@ -294,33 +296,31 @@ TEST(OpenCL, FreeConstrainedParticlesBesideBodies) {
         }
         EXPECT_LT(maxDistanceChange(start.getPositions(), state.getPositions(), rigid), 1e-10) << name;
     }
-    std::cout << "free constrained molecules beside bodies, 100 steps: OpenCL (double) vs Reference "
+    std::cout << "free constrained molecules beside bodies, 100 steps: " << GetParam() << " (double) vs Reference "
               << maxDeviation(results[0], results[1]) << " nm" << std::endl;
     EXPECT_GT(maxDeviation(start.getPositions(), results[0]), 1e-3);
     EXPECT_LT(maxDeviation(results[0], results[1]), 1e-6);
 }
 
-TEST(OpenCL, SplittingIntegratorNamesThePlatformsItSupports) {
-    REQUIRE_OPENCL();
+TEST_P(DevicePlatform, SplittingIntegratorNamesThePlatformsItSupports) {
     Cluster c = buildCluster(benzene(), 1, 0.7, 1);
     std::unique_ptr<RigidBodyIntegrator> splitting = makeIntegrator("RigidSplitting", 0.002);
-    string message = messageOf([&] { openclContext(*c.system, *splitting, "double"); });
+    string message = messageOf([&] { deviceContext(GetParam(), *c.system, *splitting, "double"); });
     EXPECT_NE(string::npos, message.find("RigidSplittingIntegrator")) << message;
     EXPECT_NE(string::npos, message.find("Reference")) << message;
     EXPECT_NE(string::npos, message.find("CPU")) << message;
-    EXPECT_EQ(string::npos, message.find("OpenCL,")) << message;
+    EXPECT_EQ(string::npos, message.find(GetParam() + ",")) << message;
 }
 
 
 
 
-TEST(OpenCL, FailedStepIsReportedWithTheStateBeforeIt) {
+TEST_P(DevicePlatform, FailedStepIsReportedWithTheStateBeforeIt) {
     // A spinning diatomic whose drift in one step is five times its length: no rotation
     // satisfies the reset. Every platform refuses the step that fails, before its step count
     // moves (the device records the failure, does nothing more, and the host reads the flag
     // at the end of the step), with the Context as it was before the step: no read of the
     // state can return frozen positions under an advancing step count.
-    REQUIRE_OPENCL();
     System system;
     system.addParticle(12.0);
     system.addParticle(16.0);
@@ -330,11 +330,11 @@ TEST(OpenCL, FailedStepIsReportedWithTheStateBeforeIt) {
     const vector<Vec3> positions = {Vec3(0, 0, 0), Vec3(0.1, 0, 0)};
     const vector<Vec3> velocities = {Vec3(0, 50 * 16.0 / 28, 0), Vec3(0, -50 * 12.0 / 28, 0)};
     for (const string kind : {"MRattle", "MRattleLangevin"})
-    for (const string name : {"Reference", "OpenCL"}) {
+    for (const string name : {string("Reference"), GetParam()}) {
         // The Langevin step writes the state in its middle: the device puts back a copy.
         std::unique_ptr<RigidBodyIntegrator> integratorPointer = makeIntegrator(kind, 0.01);
         RigidBodyIntegrator& integrator = *integratorPointer;
-        std::unique_ptr<Context> context = (name == "OpenCL" ? openclContext(system, integrator, "double")
+        std::unique_ptr<Context> context = (isDevicePlatform(name) ? deviceContext(name, system, integrator, "double")
                                                              : std::unique_ptr<Context>(new Context(system, integrator, platform(name))));
         context->setPositions(positions);
         context->setVelocities(velocities);
@@ -355,3 +355,7 @@ TEST(OpenCL, FailedStepIsReportedWithTheStateBeforeIt) {
 }
 
 
+
+INSTANTIATE_TEST_SUITE_P(Devices, DevicePlatform, ::testing::ValuesIn(builtDevicePlatforms()),
+                         [](const ::testing::TestParamInfo<string>& info) { return info.param; });
+GTEST_ALLOW_UNINSTANTIATED_PARAMETERIZED_TEST(DevicePlatform);
