@@ -20,12 +20,19 @@ STEPS_BEFORE, STEPS_AFTER = 20, 30
 # Models restarted in a new process: the builder call, evaluated here and in the script.
 MODELS = {
     # 27 rigid waters in a periodic box with a cutoff. The CPU platform keeps a neighbour list,
-    # which can make restarts differ at round-off once it is rebuilt at other steps (README);
-    # in this small box every pair is in it and these runs are exact.
+    # built anew after a restart, so its forces can differ at round-off: OpenMM's own
+    # VerletIntegrator with SETTLE restarts 2.8e-8 nm off on OpenMM 7.7's CPU platform and
+    # 7.1e-8 nm on 8.1.2's (measured, 30 steps after a checkpoint of this box), and so does
+    # M-RATTLE on 8.1.2. Bit-for-bit checks on CPU therefore use the cluster in vacuum.
     'water': 'mrattle.models.waterBox(numMolecules=27, cutoff=0.45*unit.nanometers)',
     # the 27-benzene cluster in vacuum
     'benzene': 'mrattle.models.benzeneCluster()',
 }
+
+
+def exactModel(platform):
+    """The model whose restarts are exact on this platform: see MODELS."""
+    return 'benzene' if platform.getName() == 'CPU' else 'water'
 
 
 def waterSimulation(platform, integrator=None, modelName='water'):
@@ -54,7 +61,7 @@ def assertIdentical(expected, actual):
 
 
 def test_checkpoint_continues_bit_for_bit(platform, tmp_path):
-    simulation = waterSimulation(platform)
+    simulation = waterSimulation(platform, modelName=exactModel(platform))
     simulation.step(STEPS_BEFORE)
     path = str(tmp_path/'run.chk')
     simulation.saveCheckpoint(path)
@@ -139,7 +146,7 @@ def test_checkpoint_with_other_bodies_is_refused_and_stepping_waits(tmp_path):
 
 
 def test_saved_state_continues_with_rigid_bodies(platform, tmp_path):
-    simulation = waterSimulation(platform)
+    simulation = waterSimulation(platform, modelName=exactModel(platform))
     simulation.step(STEPS_BEFORE)
     path = str(tmp_path/'state.xml')
     simulation.saveState(path)
@@ -148,7 +155,7 @@ def test_saved_state_continues_with_rigid_bodies(platform, tmp_path):
     uninterrupted = stateArrays(simulation)
 
     integrator = mrattle.MRattleIntegrator(2*unit.femtoseconds)
-    restored = waterSimulation(platform, integrator)
+    restored = waterSimulation(platform, integrator, modelName=exactModel(platform))
     restored.loadState(path)
     loaded = stateArrays(restored)
     # Rigid velocities are given back as saved, bit for bit.
