@@ -25,7 +25,7 @@ using std::vector;
 
 namespace {
 
-/** allConfigs() and MRattleLangevin on every platform, each once. */
+/** Every platform and integrator (allConfigs()). */
 class Faults : public RigidBodyTest {};
 
 struct Snapshot {

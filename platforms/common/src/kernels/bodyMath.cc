@@ -98,6 +98,11 @@ DEVICE Matrix3 inertiaOf(Matrix3 J, mixed traceJ) {
     return I;
 }
 
+/** A velocity whose square is finite and below 1e30 (NaN fails every comparison). */
+DEVICE bool isFiniteVelocity(mixed4 v) {
+    return v.x*v.x + v.y*v.y + v.z*v.z <= 1e30f;
+}
+
 /** Every work item of one launch that fails writes the same value, so no atomic is needed. */
 DEVICE void recordFailure(GLOBAL int* RESTRICT failure) {
     failure[0] = 1;

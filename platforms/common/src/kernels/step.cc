@@ -19,7 +19,7 @@ KERNEL void kickAndDrift(int numAtoms, int paddedNumAtoms, mixed kickTime, mixed
         if (velocity.w != 0) {
             velocity = kicked(velocity, scale, force, index, paddedNumAtoms);
             posDelta[index] = make_mixed4(h*velocity.x, h*velocity.y, h*velocity.z, 0);
-            if (!(velocity.x*velocity.x + velocity.y*velocity.y + velocity.z*velocity.z <= 1e30f))
+            if (!isFiniteVelocity(velocity))
                 recordFailure(failure);  // not finite (NaN fails every comparison)
         }
         else
@@ -105,7 +105,7 @@ KERNEL void kickVelocities(int numAtoms, int paddedNumAtoms, mixed kickTime,
         if (velocity.w != 0) {
             velocity = kicked(velocity, scale, force, index, paddedNumAtoms);
             velm[index] = velocity;
-            if (!(velocity.x*velocity.x + velocity.y*velocity.y + velocity.z*velocity.z <= 1e30f))
+            if (!isFiniteVelocity(velocity))
                 recordFailure(failure);  // the forces at the new positions are not finite
         }
     }
