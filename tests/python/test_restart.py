@@ -97,6 +97,9 @@ RESTART_SCRIPT = textwrap.dedent('''
 
 @pytest.mark.parametrize('modelName', sorted(MODELS))
 def test_checkpoint_restart_in_new_process_is_bit_for_bit(platform, tmp_path, modelName):
+    if platform.getName() == 'CPU' and modelName != exactModel(platform):
+        pytest.skip('OpenMM %s\'s neighbour list is rebuilt after a restart: its own forces differ at round-off '
+                    '(see MODELS)' % platform.getName())
     simulation = waterSimulation(platform, modelName=modelName)
     simulation.step(STEPS_BEFORE)
     checkpoint = str(tmp_path/'run.chk')
