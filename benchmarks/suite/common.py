@@ -19,22 +19,6 @@ def platform(name, threads=None):
     return openmm.Platform.getPlatformByName(name), properties
 
 
-def rattle_integrator(step_ps, tolerance=1e-10):
-    """RATTLE through OpenMM itself: velocity Verlet with constrained positions and velocities."""
-    integrator = openmm.CustomIntegrator(step_ps)
-    integrator.setConstraintTolerance(tolerance)
-    integrator.addPerDofVariable("x0", 0)
-    integrator.addUpdateContextState()
-    integrator.addComputePerDof("v", "v+0.5*dt*f/m")
-    integrator.addComputePerDof("x0", "x")
-    integrator.addComputePerDof("x", "x+dt*v")
-    integrator.addConstrainPositions()
-    integrator.addComputePerDof("v", "(x-x0)/dt")
-    integrator.addComputePerDof("v", "v+0.5*dt*f/m")
-    integrator.addConstrainVelocities()
-    return integrator
-
-
 def make_integrator(method, step_ps, tolerance=1e-10, bodies=None):
     """Integrators compared in the suite, by name; the plugin's get `bodies` declared."""
     if method in ("M-RATTLE", "splitting"):
@@ -43,7 +27,7 @@ def make_integrator(method, step_ps, tolerance=1e-10, bodies=None):
             integrator.addRigidBody(body)
         return integrator
     if method == "RATTLE (CustomIntegrator)":
-        return rattle_integrator(step_ps, tolerance)
+        return mrattle.baselines.rattleVerletIntegrator(step_ps, tolerance)
     if method == "Verlet + CCMA":
         integrator = openmm.VerletIntegrator(step_ps)
         integrator.setConstraintTolerance(tolerance)
