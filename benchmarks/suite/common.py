@@ -35,18 +35,6 @@ def make_integrator(method, step_ps, tolerance=1e-10, bodies=None):
     raise ValueError("unknown method %r" % method)
 
 
-def degrees_of_freedom(context, integrator):
-    """Rigid-body DOF for the plugin's integrators; OpenMM's count otherwise."""
-    if isinstance(integrator, mrattle.RigidBodyIntegrator):
-        return integrator.getNumDegreesOfFreedom()
-    system = context.getSystem()
-    dof = sum(3 for i in range(system.getNumParticles()) if system.getParticleMass(i) > 0*unit.dalton)
-    dof -= system.getNumConstraints()
-    if any(isinstance(system.getForce(i), openmm.CMMotionRemover) for i in range(system.getNumForces())):
-        dof -= 3
-    return dof
-
-
 def intra_distances(positions, bodies):
     """All intra-body pair distances, concatenated (for rigidity checks)."""
     out = []
@@ -73,7 +61,7 @@ def nve_run(system, positions, velocities, method, step_ps, total_ps, sample_ps,
         context.setVelocities(velocities)
     stride = max(1, int(round(sample_ps / step_ps)))
     samples = max(1, int(round(total_ps / (stride * step_ps))))
-    dof = degrees_of_freedom(context, integrator)
+    dof = mrattle.degreesOfFreedom(context)
     times, kinetic, potential, rigidity = [], [], [], []
     reference = None
     failure = None

@@ -5,30 +5,27 @@ import time
 import openmm
 from openmm import app, unit
 
-from .integrators import RigidBodyIntegrator
+from .integrators import RigidBodyIntegrator, RigidBodyTopology
 
 
 def degreesOfFreedom(simulationOrContext):
-    """Degrees of freedom as OpenMM counts them for the integrator in use.
+    """Degrees of freedom of a Context's System under its integrator.
 
-    For a RigidBodyIntegrator bound to the Context: 6 per rigid body (5 if linear), 3 per
+    For a RigidBodyIntegrator bound to the Context, its own count
+    (RigidBodyIntegrator.getNumDegreesOfFreedom()): 6 per rigid body (5 if linear), 3 per
     free particle, minus constraints among free particles, minus 3 with a CMMotionRemover.
-    For any other integrator: OpenMM's count (3 per massive particle, minus constraints,
-    minus 3 with a CMMotionRemover).
+    For any other integrator (VerletIntegrator with CCMA, a CustomIntegrator with
+    constraints, ...) the same rule with no body, which is OpenMM's count: 3 per massive
+    particle, minus each constraint with a massive end, minus 3 with a CMMotionRemover. Both
+    come from the C++ RigidBodyTopology, the integrators' one home of the count. Like
+    OpenMM's count, the second assumes independent constraints: constraining all 66 pair
+    distances of a 12-atom molecule removes 30 degrees of freedom, not 66.
     """
     context = getattr(simulationOrContext, 'context', simulationOrContext)
     integrator = context.getIntegrator()
     if isinstance(integrator, RigidBodyIntegrator):
         return integrator.getNumDegreesOfFreedom()
-    system = context.getSystem()
-    dof = sum(3 for i in range(system.getNumParticles()) if system.getParticleMass(i) > 0*unit.dalton)
-    for i in range(system.getNumConstraints()):
-        p1, p2, distance = system.getConstraintParameters(i)
-        if system.getParticleMass(p1) > 0*unit.dalton or system.getParticleMass(p2) > 0*unit.dalton:
-            dof -= 1
-    if any(isinstance(system.getForce(i), openmm.CMMotionRemover) for i in range(system.getNumForces())):
-        dof -= 3
-    return dof
+    return RigidBodyTopology(context.getSystem(), [], []).getNumDegreesOfFreedom(0)
 
 
 def kineticTemperature(simulationOrContext, state=None):
