@@ -75,7 +75,7 @@ DEVICE_PLATFORMS = [platform for platform, kind, path in _plugin_location.PLATFO
 #: The Reference and CPU kernel plugin.
 PLUGIN_PATH = PLUGIN_PATHS['Reference']
 
-from .reporters import ProgressReporter, StateDataReporter, degreesOfFreedom, kineticTemperature
+from .reporters import StateDataReporter, degreesOfFreedom, kineticTemperature
 from .interactions import removeIntraBodyInteractions
 from .topology import rigidBodies, declareRigidBodies
 from . import models, baselines
@@ -86,6 +86,6 @@ _installXmlSerializerHooks()
 _installSimulationHook()
 
 
-__all__ = ['RigidBodyIntegrator', 'MRattleIntegrator', 'MRattleLangevinIntegrator', 'RigidSplittingIntegrator', 'StateDataReporter', 'ProgressReporter', 'degreesOfFreedom',
+__all__ = ['RigidBodyIntegrator', 'MRattleIntegrator', 'MRattleLangevinIntegrator', 'RigidSplittingIntegrator', 'StateDataReporter', 'degreesOfFreedom',
            'kineticTemperature', 'removeIntraBodyInteractions', 'rigidBodies', 'declareRigidBodies', 'asPluginIntegrator', 'minimizeEnergy', 'RigidBodyMinimizer', 'models', 'baselines', 'PLUGIN_PATH',
            'PLUGIN_PATHS', 'PLATFORMS', 'DEVICE_PLATFORMS']

@@ -64,6 +64,20 @@ def test_builder_velocities_are_at_the_temperature():
     assert mrattle.kineticTemperature(context).value_in_unit(unit.kelvin) == pytest.approx(123, rel=1e-10)
 
 
+def test_temperature_fix_only_where_openmm_needs_it():
+    """OpenMM 8's own StateDataReporter asks the integrator (computeSystemTemperature()), so
+    mrattle's then only adds its columns; only on 7.x does it replace the count."""
+    stock = app.StateDataReporter
+    overriding = [cls for cls in mrattle.StateDataReporter.__mro__ if cls is not stock and '_initializeConstants' in vars(cls)]
+    assert mrattle.reporters.STOCK_REPORTER_ASKS_INTEGRATOR == (openmmVersion() >= (8, 0))
+    if openmmVersion() >= (8, 0):
+        assert mrattle.reporters._TemperatureReporter is stock
+        assert overriding == []
+    else:
+        assert overriding == [mrattle.reporters._TemperatureReporter]
+    assert issubclass(mrattle.StateDataReporter, stock)
+
+
 @pytest.mark.parametrize('makeIntegrator', [lambda: openmm.VerletIntegrator(0.001),
                                             lambda: mrattle.baselines.rattleVerletIntegrator(0.001)],
                          ids=['Verlet+CCMA', 'RATTLE CustomIntegrator'])
