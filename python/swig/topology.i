@@ -10,51 +10,59 @@ namespace OpenMM {
 class System;  /* passed through by reference: the Python class is openmm.System (shared SWIG type table) */
 }
 
-/* A list of particle lists (bodies, molecules): any iterable of iterables of integers. */
-%fragment("mrattle_particleListsFromPython", "header") {
+/*
+ * Particle lists from Python: any iterable of integers (anything with __index__), for one
+ * list; any iterable of such iterables, for a list of lists (bodies, molecules). False with
+ * a Python exception set on anything else.
+ */
+%fragment("mrattle_particleListFromPython", "header") {
+static bool particleListFromPython(PyObject* input, std::vector<int>& values) {
+    PyObject* iterator = PyObject_GetIter(input);
+    if (iterator == NULL) {
+        PyErr_SetString(PyExc_TypeError, "expected a sequence of particle indices");
+        return false;
+    }
+    PyObject* item;
+    while ((item = PyIter_Next(iterator)) != NULL) {
+        PyObject* index = PyNumber_Index(item);
+        Py_DECREF(item);
+        long value = index != NULL ? PyLong_AsLong(index) : -1;
+        Py_XDECREF(index);
+        if (value == -1 && PyErr_Occurred()) {
+            Py_DECREF(iterator);
+            PyErr_SetString(PyExc_TypeError, "particle indices must be integers");
+            return false;
+        }
+        if (value < INT_MIN || value > INT_MAX) {
+            Py_DECREF(iterator);
+            PyErr_SetString(PyExc_OverflowError, "particle index out of range of int");
+            return false;
+        }
+        values.push_back((int) value);
+    }
+    Py_DECREF(iterator);
+    return !PyErr_Occurred();
+}
+}
+
+%fragment("mrattle_particleListsFromPython", "header", fragment="mrattle_particleListFromPython") {
 static bool particleListsFromPython(PyObject* input, std::vector<std::vector<int> >& lists) {
-    PyObject* outer = PyObject_GetIter(input);
-    if (outer == NULL) {
+    PyObject* iterator = PyObject_GetIter(input);
+    if (iterator == NULL) {
         PyErr_SetString(PyExc_TypeError, "expected a sequence of lists of particle indices");
         return false;
     }
     PyObject* row;
-    while ((row = PyIter_Next(outer)) != NULL) {
-        PyObject* inner = PyObject_GetIter(row);
-        Py_DECREF(row);
-        if (inner == NULL) {
-            Py_DECREF(outer);
-            PyErr_SetString(PyExc_TypeError, "expected a sequence of lists of particle indices");
-            return false;
-        }
+    while ((row = PyIter_Next(iterator)) != NULL) {
         lists.emplace_back();
-        PyObject* item;
-        while ((item = PyIter_Next(inner)) != NULL) {
-            PyObject* index = PyNumber_Index(item);
-            Py_DECREF(item);
-            long value = index != NULL ? PyLong_AsLong(index) : -1;
-            Py_XDECREF(index);
-            if (value == -1 && PyErr_Occurred()) {
-                Py_DECREF(inner);
-                Py_DECREF(outer);
-                PyErr_SetString(PyExc_TypeError, "particle indices must be integers");
-                return false;
-            }
-            if (value < INT_MIN || value > INT_MAX) {
-                Py_DECREF(inner);
-                Py_DECREF(outer);
-                PyErr_SetString(PyExc_OverflowError, "particle index out of range of int");
-                return false;
-            }
-            lists.back().push_back((int) value);
-        }
-        Py_DECREF(inner);
-        if (PyErr_Occurred()) {
-            Py_DECREF(outer);
+        bool converted = particleListFromPython(row, lists.back());
+        Py_DECREF(row);
+        if (!converted) {
+            Py_DECREF(iterator);
             return false;
         }
     }
-    Py_DECREF(outer);
+    Py_DECREF(iterator);
     return !PyErr_Occurred();
 }
 }
