@@ -238,3 +238,16 @@ def test_sampling_verdict_counts_standard_errors_of_the_difference():
     text = "".join(run_suite.sampling_verdict(rows, 8))   # SE = 0.5 * sqrt(2/8) = 0.25
     assert "- a: difference 0.5, standard error 0.25: 2.0 SE, within 2 SE" in text
     assert "- b: difference 1, standard error 0.25: 4.0 SE, beyond 2 SE" in text
+
+
+def test_every_method_counts_degrees_of_freedom_with_the_package():
+    """One count for the four methods the suite compares: the plugin's from the integrator,
+    the constrained baselines' as OpenMM counts them (9 independent constraints per 5-site
+    molecule: 6 left each, as for the rigid body)."""
+    from suite import common
+    system, positions, bodies = common.tetrahedral_cluster(num_per_side=2, constraints=9)
+    velocities = common.rigid_velocities(system, positions, bodies, 200.0)
+    for method in ("M-RATTLE", "splitting", "RATTLE (CustomIntegrator)", "Verlet + CCMA"):
+        run = common.nve_run(system, positions, velocities, method, 0.001, 0.002, 0.001, "Reference", bodies)
+        assert run["failure"] is None
+        assert run["dof"] == 6*8 == mrattle.degreesOfFreedom(run["context"])
