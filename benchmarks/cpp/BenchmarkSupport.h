@@ -2,10 +2,13 @@
 #define MRATTLE_BENCHMARK_SUPPORT_H_
 
 // What the timing programs (step_cost, device_speed) share: their comma-separated option
-// lists, the wall clock, and the median they report.
+// lists, their two CSV outputs, the wall clock, and the median they report.
 
 #include <algorithm>
 #include <chrono>
+#include <fstream>
+#include <iostream>
+#include <stdexcept>
 #include <sstream>
 #include <string>
 #include <vector>
@@ -44,6 +47,25 @@ inline std::vector<int> splitInts(const std::string& text) {
         values.push_back(std::stoi(part));
     return values;
 }
+
+/** The two CSV outputs: timings to --out (default stdout), targets to --ratios (default stderr). */
+struct CsvOutputs {
+    CsvOutputs(const std::string& outPath, const std::string& ratiosPath)
+        : out(open(outPath, outFile, std::cout)), ratios(open(ratiosPath, ratioFile, std::cerr)) {}
+    std::ofstream outFile, ratioFile;  // declared before the references bound to them
+    std::ostream& out;
+    std::ostream& ratios;
+
+private:
+    static std::ostream& open(const std::string& path, std::ofstream& file, std::ostream& fallback) {
+        if (path.empty())
+            return fallback;
+        file.open(path);
+        if (!file)
+            throw std::runtime_error("cannot write " + path);
+        return file;
+    }
+};
 
 } // namespace MRattleBenchmark
 

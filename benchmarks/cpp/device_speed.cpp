@@ -40,7 +40,6 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdlib>
-#include <fstream>
 #include <iomanip>
 #include <iostream>
 #include <map>
@@ -325,13 +324,9 @@ int main(int argc, char** argv) {
                       << " (give their library with --plugins)\n";
             return 3;
         }
-        std::ofstream outFile, ratioFile;
-        if (!options.out.empty())
-            outFile.open(options.out);
-        if (!options.ratios.empty())
-            ratioFile.open(options.ratios);
-        std::ostream& out = options.out.empty() ? std::cout : outFile;
-        std::ostream& ratios = options.ratios.empty() ? std::cerr : ratioFile;
+        CsvOutputs csv(options.out, options.ratios);
+        std::ostream& out = csv.out;
+        std::ostream& ratios = csv.ratios;
         out << "platform,device,precision,system,waters,atoms,integrator,steps_per_batch,batches,sync_ms,"
                "median_ms_per_step,min_ms_per_step,max_ms_per_step,ns_per_day,geometry_error_nm,finite\n";
         ratios << "system,atoms,measure,value,target,met\n";

@@ -37,7 +37,6 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdlib>
-#include <fstream>
 #include <iostream>
 #include <map>
 #include <set>
@@ -217,13 +216,9 @@ int main(int argc, char** argv) {
         setenv("OPENMM_PLUGIN_DIR", MRATTLE_OPENMM_PLUGIN_DIR, 0);
         Platform::loadPluginsFromDirectory(Platform::getDefaultPluginsDirectory());
         registerMRattleReferenceKernelFactories();
-        std::ofstream outFile, ratioFile;
-        if (!options.out.empty())
-            outFile.open(options.out);
-        if (!options.ratios.empty())
-            ratioFile.open(options.ratios);
-        std::ostream& out = options.out.empty() ? std::cout : outFile;
-        std::ostream& ratios = options.ratios.empty() ? std::cerr : ratioFile;
+        CsvOutputs csv(options.out, options.ratios);
+        std::ostream& out = csv.out;
+        std::ostream& ratios = csv.ratios;
         out << "platform,integrator,atoms_per_body,bodies,atoms,constraints_per_body,steps_per_batch,batches,"
                "median_us_per_step,min_us_per_step,max_us_per_step,median_ns_per_atom_step,finite,threads\n";
         ratios << "platform,atoms_per_body,bodies,ratio,value,target,met\n";
