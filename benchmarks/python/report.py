@@ -30,7 +30,7 @@ def write(path, md, complete, only, minutes):
                 "the other sections come from the run named at the top.*\n" % (
                     only, datetime.datetime.utcnow().strftime("%Y-%m-%d %H:%M"), minutes)
         with open(path) as f:
-            text = splice_sections(f.read(), "\n".join(md[2:]), stamp)
+            text = splice_sections(f.read(), "\n".join(md[len(header(False)):]), stamp)  # without the header
     with open(path, "w") as f:
         f.write(text)
 
