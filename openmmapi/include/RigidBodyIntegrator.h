@@ -4,6 +4,7 @@
 #include "RigidBodyTopology.h"
 #include "openmm/Integrator.h"
 #include "openmm/Kernel.h"
+#include "internal/RigidBodyStepState.h"
 #include "internal/windowsExportMRattle.h"
 #include <string>
 #include <vector>
@@ -145,28 +146,15 @@ private:
     double kineticEnergyPart(int part);
     /** Whether this integrator is the one that steps the Context (it may be a member of a CompoundIntegrator). */
     bool isCurrentIntegrator() const;
+    /** stateChanged(Positions): the kernel takes the new shapes of the bodies (refused if not finite). */
+    void useNewPositions();
+    /** stateChanged(Positions or Velocities): make the Context's velocities rigid now, later, or keep them. */
+    void useNewVelocities(bool byPositions);
     mutable OpenMM::Kernel kernel;
     std::vector<std::vector<int> > declaredBodies;
     RigidBodyTopology topology;
-    bool forcesAreValid = false;
-    /** Velocities were set while another integrator was current: project them before stepping. */
-    bool velocitiesNeedProjection = false;
-    /** The Context's step count after this integrator's last step; another value means another integrator stepped. */
-    long long lastStepCount = -1;
-    /** A refused checkpoint left mixed data: stepping waits for Context::reinitialize() or a checkpoint that fits. */
-    bool refusedCheckpoint = false;
-    /**
-     * The last positions or velocities set were not finite (or the velocities could not be
-     * made rigid at the positions): stepping waits until new ones are set.
-     */
-    bool positionsNotFinite = false, velocitiesNotFinite = false;
-    /** Positions were set (or loaded): rigid-body velocities are defined only relative to them. */
-    bool positionsSet = false;
-    /**
-     * Between a checkpoint load that fits and its last notification: its velocities are
-     * this integrator's, rigid by construction, and are kept untouched (bit for bit).
-     */
-    bool loadingCheckpoint = false;
+    /** Flags of the Context's state between calls (forces valid, positions set, checkpoint refused, ...). */
+    RigidBodyStepState stepState;
 };
 
 } // namespace MRattlePlugin

@@ -85,6 +85,28 @@ public:
     const std::vector<double>& getMasses() const { return masses; }
 
 private:
+    // The constructor's steps, in order.
+    /** Read the particle masses, refusing a negative or non-finite one. */
+    void readMasses(const OpenMM::System& system);
+    /** The default bodies: each molecule's massive, non-virtual particles. */
+    std::vector<std::vector<int> > massiveMembersOf(const OpenMM::System& system,
+                                                    const std::vector<std::vector<int> >& molecules) const;
+    /** Check the explicit bodies against the System: indices in range, no virtual site or massless member, no overlap. */
+    void checkExplicitBodies(const OpenMM::System& system, const std::vector<std::vector<int> >& explicitBodies) const;
+    /**
+     * Make the candidates of 2+ particles the bodies and every other massive particle free;
+     * return, for each body, its index among the candidates (for messages).
+     */
+    std::vector<int> assignBodies(const OpenMM::System& system, const std::vector<std::vector<int> >& candidates);
+    /** Sort the System's constraints (massless, inside a body, between free particles); refuse one leaving a body. */
+    void classifyConstraints(const OpenMM::System& system, const std::vector<int>& definitionIndex);
+    static bool findCMMotionRemover(const OpenMM::System& system);
+    /** With a Monte Carlo barostat (it scales molecules apart), refuse a body spanning two molecules. */
+    void checkBarostatKeepsBodiesWhole(const OpenMM::System& system, const std::vector<std::vector<int> >& molecules,
+                                       const std::vector<int>& definitionIndex) const;
+    /** The value of getSignature(), from the bodies. */
+    uint64_t partitionSignature() const;
+    bool isMassive(const OpenMM::System& system, int particle) const;
     /** The part of a CMMotionRemover's 3 degrees of freedom taken from the free particles: their share of the mass. */
     double removedFromFree() const;
     std::vector<std::vector<int> > bodies;

@@ -19,13 +19,6 @@ double temperatureOf(double kineticEnergy, double dof) {
     return dof > 0 ? 2 * kineticEnergy / (dof * BOLTZ) : 0.0;
 }
 
-/** What to do after a refused checkpoint, in the refusal and in every refused step after it. */
-const char* const RefusedCheckpointRecovery =
-    "OpenMM had already loaded its own part of that checkpoint (positions, velocities, time, box, parameters, random "
-    "state), which may be damaged: call Context::reinitialize() (without preserving the state), then set the state "
-    "again (Context::setState() with a saved State, or positions and velocities), or load a checkpoint that fits. "
-    "The integrator will not step until then";
-
 } // namespace
 
 RigidBodyIntegrator::RigidBodyIntegrator() {
@@ -168,12 +161,7 @@ void RigidBodyIntegrator::initialize(ContextImpl& contextRef) {
     owner = &contextRef.getOwner();
     kernel = contextRef.getPlatform().createKernel(getStepKernelName(), contextRef);
     kernel.getAs<RigidBodyKernel>().initialize(system, topology, *this);
-    forcesAreValid = false;
-    velocitiesNeedProjection = false;
-    lastStepCount = -1;
-    refusedCheckpoint = false;
-    positionsNotFinite = velocitiesNotFinite = false;
-    positionsSet = false;
+    stepState.reset();
 }
 
 void RigidBodyIntegrator::cleanup() {
@@ -193,59 +181,45 @@ bool RigidBodyIntegrator::isCurrentIntegrator() const {
 }
 
 void RigidBodyIntegrator::stateChanged(State::DataType changed) {
-    forcesAreValid = false;
+    stepState.invalidateForces();
     if (context == nullptr)
         return;
-    if (changed == State::Energy && loadingCheckpoint) {
-        // OpenMM's last notification of a checkpoint load: continue as the run that wrote it.
-        loadingCheckpoint = false;
-        lastStepCount = context->getStepCount();
-        velocitiesNeedProjection = false;
+    // OpenMM's last notification of a checkpoint load: continue as the run that wrote it.
+    if (changed == State::Energy && stepState.finishCheckpointLoad(context->getStepCount()))
         return;
+    if (changed == State::Positions)
+        useNewPositions();
+    if (changed == State::Positions || changed == State::Velocities)
+        useNewVelocities(changed == State::Positions);
+}
+
+void RigidBodyIntegrator::useNewPositions() {
+    try {
+        kernel.getAs<RigidBodyKernel>().updateShapes(*context);
+    } catch (const OpenMMException& e) {
+        stepState.positionsRefused();
+        throw OpenMMException(std::string("setPositions: ") + e.what() + "; the integrator will not step until "
+                              "finite positions are set");
     }
-    RigidBodyKernel& stepKernel = kernel.getAs<RigidBodyKernel>();
-    if (changed == State::Positions) {
-        try {
-            stepKernel.updateShapes(*context);
-        } catch (const OpenMMException& e) {
-            positionsNotFinite = true;
-            throw OpenMMException(std::string("setPositions: ") + e.what() + "; the integrator will not step until "
-                                  "finite positions are set");
-        }
-        positionsNotFinite = false;
-        positionsSet = true;
-    }
+    stepState.positionsAccepted();
+}
+
+void RigidBodyIntegrator::useNewVelocities(bool byPositions) {
     // Velocities the user sets are made rigid at once, so what the Context reports is what
     // the integrator uses; rigid ones (a checkpoint's, a saved State's) are kept bit for bit.
-    if (changed == State::Positions || changed == State::Velocities) {
-        // After a refused checkpoint the velocities are that checkpoint's (on some platforms
-        // garbage): they are projected once new ones are set.
-        if (loadingCheckpoint)
-            velocitiesNotFinite = false;  // a checkpoint's velocities are as they were written
-        else if (changed == State::Positions && velocitiesNotFinite) {
-            // The velocities last set were refused: nothing to project; step() waits for finite ones.
-        }
-        else if (isCurrentIntegrator() && positionsSet && !refusedCheckpoint) {
-            try {
-                stepKernel.projectVelocities(*context, getConstraintTolerance());
-            } catch (const OpenMMException& e) {
-                // The kernel left the velocities as they were. Name the call that raised it.
-                velocitiesNotFinite = true;
-                if (changed == State::Positions)
-                    throw OpenMMException(std::string("setPositions: the Context's velocities (set before these "
-                                                      "positions) cannot be made rigid at them: ") + e.what() +
-                                          "; the integrator will not step until velocities are set again");
-                throw OpenMMException(std::string("setVelocities: ") + e.what() + "; the integrator will not step "
-                                      "until finite velocities are set");
-            }
-            if (changed == State::Velocities)
-                velocitiesNotFinite = false;
-        }
-        else {
-            velocitiesNeedProjection = true;
-            if (changed == State::Velocities)
-                velocitiesNotFinite = false;  // checked when projected
-        }
+    if (stepState.velocitiesChanged(byPositions, isCurrentIntegrator()) != RigidBodyStepState::VelocityUse::ProjectNow)
+        return;
+    try {
+        kernel.getAs<RigidBodyKernel>().projectVelocities(*context, getConstraintTolerance());
+    } catch (const OpenMMException& e) {
+        // The kernel left the velocities as they were. Name the call that raised it.
+        stepState.velocitiesRefused();
+        if (byPositions)
+            throw OpenMMException(std::string("setPositions: the Context's velocities (set before these positions) "
+                                              "cannot be made rigid at them: ") + e.what() +
+                                  "; the integrator will not step until velocities are set again");
+        throw OpenMMException(std::string("setVelocities: ") + e.what() + "; the integrator will not step until "
+                              "finite velocities are set");
     }
 }
 
@@ -261,18 +235,16 @@ void RigidBodyIntegrator::loadCheckpoint(std::istream& stream) {
     try {
         std::istringstream kernelState(RigidBodyCheckpointHeader::read(stream, getStepKernelName(), topology));
         kernel.getAs<RigidBodyKernel>().loadCheckpoint(*context, kernelState);
-        loadingCheckpoint = true;
     } catch (const OpenMMException& e) {
         // OpenMM has already read its own part unchecked: positions, velocities, time, box,
         // parameters and its platform's random state (garbage there crashes a later step).
         // Only Context::reinitialize() rebuilds all of it, so stepping waits for it (or for
         // a checkpoint that fits); meanwhile the platform's unchecked state is made valid.
-        refusedCheckpoint = true;
-        forcesAreValid = false;
+        stepState.checkpointRefused();
         kernel.getAs<RigidBodyKernel>().discardRefusedCheckpoint(*context);
-        throw OpenMMException(std::string("loadCheckpoint: ") + e.what() + ". " + RefusedCheckpointRecovery);
+        throw OpenMMException(RigidBodyStepState::refusedCheckpointMessage(e.what()));
     }
-    refusedCheckpoint = false;
+    stepState.checkpointLoaded();
 }
 
 double RigidBodyIntegrator::computeKineticEnergy() {
@@ -285,7 +257,7 @@ vector<Vec3> RigidBodyIntegrator::getVelocitiesForTemperature(const System& syst
     if (!(temperature >= 0) || !std::isfinite(temperature))
         throw OpenMMException("setVelocitiesToTemperature: the temperature must be a finite number >= 0, got " +
                               std::to_string(temperature));
-    if (!positionsSet)
+    if (!stepState.havePositions())
         throw OpenMMException("setVelocitiesToTemperature: set the positions first: rigid-body velocities depend on them");
     return kernel.getAs<RigidBodyKernel>().getVelocitiesForTemperature(*context, temperature, randomSeed,
                                                                        getConstraintTolerance());
@@ -293,37 +265,19 @@ vector<Vec3> RigidBodyIntegrator::getVelocitiesForTemperature(const System& syst
 
 void RigidBodyIntegrator::step(int steps) {
     requireContext();
-    if (getStepSize() == 0 || !std::isfinite(getStepSize()))
-        throw OpenMMException("The step size must be a finite nonzero number of picoseconds, got " +
-                              std::to_string(getStepSize()));
-    if (!std::isfinite(1.0 / getStepSize()))
-        throw OpenMMException("The step size " + std::to_string(getStepSize()) + " ps is too small: its inverse is "
-                              "not finite");
-    if (refusedCheckpoint)
-        throw OpenMMException(std::string("step: the last loadCheckpoint() was refused. ") + RefusedCheckpointRecovery);
-    if (!positionsSet)
-        throw OpenMMException("step: the Context's positions have not been set");
-    if (positionsNotFinite)
-        throw OpenMMException("step: the Context's positions are not finite; set finite ones before stepping");
-    if (velocitiesNotFinite)
-        throw OpenMMException("step: the Context's velocities are not finite, or could not be made rigid at its "
-                              "positions; set velocities again before stepping");
-    RigidBodyKernel& stepKernel = kernel.getAs<RigidBodyKernel>();
+    stepState.requireSteppable(getStepSize());
     for (int i = 0; i < steps; i++) {
         // Another integrator (of a CompoundIntegrator) stepped since this one did, or
         // velocities were set while it was not current: this integrator's bodies decide
         // now, before a thermostat's collisions (which the kernel must see as such).
-        if (context->getStepCount() != lastStepCount || velocitiesNeedProjection) {
-            forcesAreValid = false;
-            stepKernel.projectVelocities(*context, getConstraintTolerance());
-            velocitiesNeedProjection = false;
+        if (stepState.mustProjectBeforeStep(context->getStepCount())) {
+            kernel.getAs<RigidBodyKernel>().projectVelocities(*context, getConstraintTolerance());
+            stepState.projectedBeforeStep();
         }
-        if (context->updateContextState())
-            forcesAreValid = false;
         // A getState() may have overwritten the forces with other force groups.
-        if (context->getLastForceGroups() != getIntegrationForceGroups())
-            forcesAreValid = false;
-        executeStep(kernel, *context, forcesAreValid);
-        lastStepCount = context->getStepCount();
+        if (context->updateContextState() || context->getLastForceGroups() != getIntegrationForceGroups())
+            stepState.invalidateForces();
+        executeStep(kernel, *context, stepState.forcesAreValid());
+        stepState.stepTaken(context->getStepCount());
     }
 }

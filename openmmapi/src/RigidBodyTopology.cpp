@@ -39,6 +39,22 @@ void RigidBodyTopology::checkBodyDefinition(int bodyIndex, const vector<int>& pa
 
 RigidBodyTopology::RigidBodyTopology(const System& system, const vector<vector<int> >& explicitBodies,
                            const vector<vector<int> >& molecules) {
+    readMasses(system);
+    if (!explicitBodies.empty())
+        checkExplicitBodies(system, explicitBodies);
+    const vector<int> definitionIndex =
+        assignBodies(system, explicitBodies.empty() ? massiveMembersOf(system, molecules) : explicitBodies);
+    classifyConstraints(system, definitionIndex);
+    hasCMMotionRemover = findCMMotionRemover(system);
+    checkBarostatKeepsBodiesWhole(system, molecules, definitionIndex);
+    signature = partitionSignature();
+}
+
+bool RigidBodyTopology::isMassive(const System& system, int particle) const {
+    return masses[particle] != 0.0 && !system.isVirtualSite(particle);
+}
+
+void RigidBodyTopology::readMasses(const System& system) {
     const int numParticles = system.getNumParticles();
     masses.resize(numParticles);
     for (int i = 0; i < numParticles; i++) {
@@ -48,44 +64,49 @@ RigidBodyTopology::RigidBodyTopology(const System& system, const vector<vector<i
             fail("Particle " + std::to_string(i) + " has mass " + std::to_string(masses[i]) +
                  ": a rigid-body integrator needs every mass finite and >= 0 (0 for a massless particle)");
     }
-    auto isMassive = [&](int i) { return masses[i] != 0.0 && !system.isVirtualSite(i); };
+}
 
+vector<vector<int> > RigidBodyTopology::massiveMembersOf(const System& system, const vector<vector<int> >& molecules) const {
+    // Molecules, taken without virtual sites and massless particles.
     vector<vector<int> > candidates;
-    if (explicitBodies.empty()) {
-        // Molecules, taken without virtual sites and massless particles.
-        for (const vector<int>& molecule : molecules) {
-            vector<int> members;
-            for (int i : molecule)
-                if (isMassive(i))
-                    members.push_back(i);
-            candidates.push_back(members);
-        }
-    } else {
-        vector<int> ownerBody(numParticles, -1);
-        for (int b = 0; b < (int) explicitBodies.size(); b++) {
-            checkBodyDefinition(b, explicitBodies[b]);
-            for (int i : explicitBodies[b]) {
-                if (i >= numParticles)
-                    fail(describeBody(b) + " lists particle " + std::to_string(i) + ", but the System has only " +
-                         std::to_string(numParticles) + " particles");
-                if (system.isVirtualSite(i))
-                    fail(describeBody(b) + " lists particle " + std::to_string(i) +
-                         ", which is a virtual site: virtual sites follow their parents and cannot be body members");
-                if (masses[i] == 0.0)
-                    fail(describeBody(b) + " lists particle " + std::to_string(i) +
-                         ", which has zero mass: massless particles cannot be body members");
-                if (ownerBody[i] != -1)
-                    fail("Particle " + std::to_string(i) + " is listed in rigid bodies " + std::to_string(ownerBody[i]) +
-                         " and " + std::to_string(b) + ": a particle can belong to one body only");
-                ownerBody[i] = b;
-            }
-        }
-        candidates = explicitBodies;
+    for (const vector<int>& molecule : molecules) {
+        vector<int> members;
+        for (int i : molecule)
+            if (isMassive(system, i))
+                members.push_back(i);
+        candidates.push_back(members);
     }
+    return candidates;
+}
 
+void RigidBodyTopology::checkExplicitBodies(const System& system, const vector<vector<int> >& explicitBodies) const {
+    const int numParticles = system.getNumParticles();
+    vector<int> ownerBody(numParticles, -1);
+    for (int b = 0; b < (int) explicitBodies.size(); b++) {
+        checkBodyDefinition(b, explicitBodies[b]);
+        for (int i : explicitBodies[b]) {
+            if (i >= numParticles)
+                fail(describeBody(b) + " lists particle " + std::to_string(i) + ", but the System has only " +
+                     std::to_string(numParticles) + " particles");
+            if (system.isVirtualSite(i))
+                fail(describeBody(b) + " lists particle " + std::to_string(i) +
+                     ", which is a virtual site: virtual sites follow their parents and cannot be body members");
+            if (masses[i] == 0.0)
+                fail(describeBody(b) + " lists particle " + std::to_string(i) +
+                     ", which has zero mass: massless particles cannot be body members");
+            if (ownerBody[i] != -1)
+                fail("Particle " + std::to_string(i) + " is listed in rigid bodies " + std::to_string(ownerBody[i]) +
+                     " and " + std::to_string(b) + ": a particle can belong to one body only");
+            ownerBody[i] = b;
+        }
+    }
+}
+
+vector<int> RigidBodyTopology::assignBodies(const System& system, const vector<vector<int> >& candidates) {
     // Bodies of one particle are free particles.
+    const int numParticles = system.getNumParticles();
     bodyOfParticle.assign(numParticles, -1);
-    vector<int> definitionIndex;  // index of each body among those the user added (or the molecules)
+    vector<int> definitionIndex;
     for (int d = 0; d < (int) candidates.size(); d++) {
         const vector<int>& members = candidates[d];
         if (members.size() < 2)
@@ -101,9 +122,12 @@ RigidBodyTopology::RigidBodyTopology(const System& system, const vector<vector<i
         bodyMass.push_back(total);
     }
     for (int i = 0; i < numParticles; i++)
-        if (bodyOfParticle[i] == -1 && isMassive(i))
+        if (bodyOfParticle[i] == -1 && isMassive(system, i))
             freeParticles.push_back(i);
+    return definitionIndex;
+}
 
+void RigidBodyTopology::classifyConstraints(const System& system, const vector<int>& definitionIndex) {
     for (int c = 0; c < system.getNumConstraints(); c++) {
         int p1, p2;
         double distance;
@@ -123,11 +147,17 @@ RigidBodyTopology::RigidBodyTopology(const System& system, const vector<vector<i
                  " outside that body: constraints may join particles of one body or free particles only");
         }
     }
+}
 
+bool RigidBodyTopology::findCMMotionRemover(const System& system) {
     for (int f = 0; f < system.getNumForces(); f++)
         if (dynamic_cast<const CMMotionRemover*>(&system.getForce(f)) != nullptr)
-            hasCMMotionRemover = true;
+            return true;
+    return false;
+}
 
+void RigidBodyTopology::checkBarostatKeepsBodiesWhole(const System& system, const vector<vector<int> >& molecules,
+                                                      const vector<int>& definitionIndex) const {
     // OpenMM's barostats scale each molecule's centre: a body spanning molecules would be
     // torn apart at every accepted move.
     const char* barostat = nullptr;
@@ -140,33 +170,36 @@ RigidBodyTopology::RigidBodyTopology(const System& system, const vector<vector<i
         else if (dynamic_cast<const MonteCarloMembraneBarostat*>(force))
             barostat = "MonteCarloMembraneBarostat";
     }
-    if (barostat != nullptr) {
-        vector<int> moleculeOf(numParticles, -1);
-        for (int m = 0; m < (int) molecules.size(); m++)
-            for (int i : molecules[m])
-                moleculeOf[i] = m;
-        for (int b = 0; b < (int) bodies.size(); b++)
-            for (int i : bodies[b])
-                if (moleculeOf[i] != moleculeOf[bodies[b][0]])
-                    fail(describeBody(definitionIndex[b]) + " holds particles " + std::to_string(bodies[b][0]) + " and " +
-                         std::to_string(i) + " of two different molecules, and the System's " + barostat +
-                         " scales molecules apart, which would deform the body: make each body one molecule, or join "
-                         "its parts with a bond or constraint so that OpenMM sees one molecule");
-    }
+    if (barostat == nullptr)
+        return;
+    vector<int> moleculeOf(system.getNumParticles(), -1);
+    for (int m = 0; m < (int) molecules.size(); m++)
+        for (int i : molecules[m])
+            moleculeOf[i] = m;
+    for (int b = 0; b < (int) bodies.size(); b++)
+        for (int i : bodies[b])
+            if (moleculeOf[i] != moleculeOf[bodies[b][0]])
+                fail(describeBody(definitionIndex[b]) + " holds particles " + std::to_string(bodies[b][0]) + " and " +
+                     std::to_string(i) + " of two different molecules, and the System's " + barostat +
+                     " scales molecules apart, which would deform the body: make each body one molecule, or join "
+                     "its parts with a bond or constraint so that OpenMM sees one molecule");
+}
 
+uint64_t RigidBodyTopology::partitionSignature() const {
     // FNV-1a hash of, for each particle, the smallest index in its body, or -1.
-    vector<int32_t> representative(numParticles, -1);
+    vector<int32_t> representative(bodyOfParticle.size(), -1);
     for (const vector<int>& body : bodies) {
         int smallest = *std::min_element(body.begin(), body.end());
         for (int particle : body)
             representative[particle] = smallest;
     }
-    signature = 14695981039346656037ULL;
+    uint64_t hash = 14695981039346656037ULL;
     const unsigned char* bytes = reinterpret_cast<const unsigned char*>(representative.data());
     for (size_t i = 0; i < representative.size() * sizeof(int32_t); i++) {
-        signature ^= bytes[i];
-        signature *= 1099511628211ULL;
+        hash ^= bytes[i];
+        hash *= 1099511628211ULL;
     }
+    return hash;
 }
 
 double RigidBodyTopology::getTranslationalDegreesOfFreedom() const {

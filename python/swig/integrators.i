@@ -4,8 +4,8 @@
  * The classes derive from OpenMM's Python class openmm.Integrator: SWIG's shared runtime
  * type table (do not define SWIG_TYPE_TABLE) lets openmm.Context accept them, and the
  * inherited getStepSize()/setStepSize() handle units as for OpenMM's integrators.
- * To wrap another RigidBodyIntegrator subclass: include its header below, add a
- * MRATTLE_INTEGRATOR line and a dynamic_cast line in _pluginIntegratorProxy.
+ * To wrap another RigidBodyIntegrator subclass: one MRATTLE_INTEGRATOR line (below), after
+ * the features of its own methods if it has any.
  */
 %module(package="mrattle", docstring="SWIG wrappers of the M-RATTLE plugin's integrators.") integrators
 
@@ -16,9 +16,7 @@ from openmm import unit
 %import(module="openmm") "openmm_base.i"
 
 %{
-#include "MRattleIntegrator.h"
-#include "MRattleLangevinIntegrator.h"
-#include "RigidSplittingIntegrator.h"
+#include "RigidBodyIntegrator.h"
 #include "RigidBodyMinimizer.h"
 #include <climits>
 #include <exception>
@@ -174,25 +172,49 @@ MRATTLE_UNITS(computeFreeTemperature, unit.kelvin)
 %include "RigidBodyIntegrator.h"
 
 /*
- * Wrap one concrete integrator class whose constructor takes the step size: a Quantity
- * of time or a number of picoseconds, as for openmm.VerletIntegrator.
+ * OpenMM's XmlSerializer returns deserialized integrators as plain openmm.Integrator
+ * proxies: _pluginIntegratorProxy (below) gives a new, non-owning proxy of the plugin's
+ * class for the same object, trying each wrapped class's cast in turn.
  */
-%define MRATTLE_INTEGRATOR(CLASS, HEADER)
+%{
+typedef PyObject* (*PluginIntegratorCast)(OpenMM::Integrator* integrator);
+static std::vector<PluginIntegratorCast> pluginIntegratorCasts;
+%}
+
+/*
+ * Wrap one concrete integrator class, declared in CLASS.h: its constructor takes the step
+ * size as a Quantity of time or a number of picoseconds, as for openmm.VerletIntegrator
+ * (a constructor with more arguments gets its own pythonprepend, with its signature, before
+ * this line: that one is the more specific and wins), and _pluginIntegratorProxy knows it.
+ */
 %typemap(doctype) double stepSize "float or Quantity (time)"
+%define MRATTLE_INTEGRATOR(CLASS)
+%{
+#include "CLASS.h"
+static PyObject* pluginIntegratorAs##CLASS(OpenMM::Integrator* integrator) {
+    MRattlePlugin::CLASS* cast = dynamic_cast<MRattlePlugin::CLASS*>(integrator);
+    return cast != NULL ? SWIG_NewPointerObj(SWIG_as_voidptr(cast), SWIGTYPE_p_MRattlePlugin__##CLASS, 0) : NULL;
+}
+%}
+%init %{
+    pluginIntegratorCasts.push_back(pluginIntegratorAs##CLASS);
+%}
 %feature("pythonprepend") MRattlePlugin::CLASS::CLASS %{
     if unit.is_quantity(stepSize):
         stepSize = stepSize.value_in_unit(unit.picosecond)
 %}
-%include HEADER
+%include "CLASS.h"
 %enddef
 
-MRATTLE_INTEGRATOR(MRattleIntegrator, "MRattleIntegrator.h")
-MRATTLE_INTEGRATOR(RigidSplittingIntegrator, "RigidSplittingIntegrator.h")
+MRATTLE_INTEGRATOR(MRattleIntegrator)
+MRATTLE_INTEGRATOR(RigidSplittingIntegrator)
 
 /* The Langevin integrator: temperature, friction and step size with units, as OpenMM's LangevinMiddleIntegrator. */
 %typemap(doctype) double temperature "float or Quantity (temperature)"
 %typemap(doctype) double frictionCoeff "float or Quantity (1/time)"
-%feature("pythonprepend") MRattlePlugin::MRattleLangevinIntegrator::MRattleLangevinIntegrator %{
+%feature("pythonprepend") MRattlePlugin::MRattleLangevinIntegrator::MRattleLangevinIntegrator(double temperature,
+                                                                                          double frictionCoeff,
+                                                                                          double stepSize) %{
     if unit.is_quantity(temperature):
         temperature = temperature.value_in_unit(unit.kelvin)
     if unit.is_quantity(frictionCoeff):
@@ -214,7 +236,7 @@ MRATTLE_INTEGRATOR(RigidSplittingIntegrator, "RigidSplittingIntegrator.h")
 %feature("pythonappend") MRattlePlugin::MRattleLangevinIntegrator::getFriction %{
     val = val/unit.picosecond
 %}
-%include "MRattleLangevinIntegrator.h"
+MRATTLE_INTEGRATOR(MRattleLangevinIntegrator)
 
 /* The plugin's XML check (the rule lives in C++): the package runs it before OpenMM's reader. */
 %{
@@ -229,19 +251,12 @@ void _checkWellFormedXml(const char* document) {
 /* The rigid-body minimizer; mrattle.minimizeEnergy (minimize.py) adds units. */
 %include "RigidBodyMinimizer.h"
 
-/*
- * OpenMM's XmlSerializer returns deserialized integrators as plain openmm.Integrator
- * proxies: this gives a new, non-owning proxy of the plugin's class for the same object
- * (None for other integrators). The package moves the ownership over.
- */
+/* The plugin's class of a deserialized integrator (None for other integrators); the package moves the ownership over. */
 %inline %{
 PyObject* _pluginIntegratorProxy(OpenMM::Integrator* integrator) {
-    if (MRattlePlugin::MRattleIntegrator* cast = dynamic_cast<MRattlePlugin::MRattleIntegrator*>(integrator))
-        return SWIG_NewPointerObj(SWIG_as_voidptr(cast), SWIGTYPE_p_MRattlePlugin__MRattleIntegrator, 0);
-    if (MRattlePlugin::RigidSplittingIntegrator* cast = dynamic_cast<MRattlePlugin::RigidSplittingIntegrator*>(integrator))
-        return SWIG_NewPointerObj(SWIG_as_voidptr(cast), SWIGTYPE_p_MRattlePlugin__RigidSplittingIntegrator, 0);
-    if (MRattlePlugin::MRattleLangevinIntegrator* cast = dynamic_cast<MRattlePlugin::MRattleLangevinIntegrator*>(integrator))
-        return SWIG_NewPointerObj(SWIG_as_voidptr(cast), SWIGTYPE_p_MRattlePlugin__MRattleLangevinIntegrator, 0);
+    for (PluginIntegratorCast cast : pluginIntegratorCasts)
+        if (PyObject* proxy = cast(integrator))
+            return proxy;
     Py_RETURN_NONE;
 }
 %}

@@ -10,8 +10,8 @@ namespace MRattlePlugin {
 
 /**
  * The XML form of what every RigidBodyIntegrator has: step size, constraint tolerance,
- * integration force groups and the bodies declared with addRigidBody(). A proxy for an
- * integrator of this family writes its version and then calls serialize(); its
+ * integration force groups and the bodies declared with addRigidBody(). The family's proxy,
+ * RigidBodyIntegratorProxy<T>, writes its version and then calls serialize(); its
  * deserialize() checks the version with checkVersion(), constructs the integrator and
  * calls deserialize(). Properties are parsed strictly: a malformed number or index
  * raises an OpenMMException naming the integrator, the property and the text found.

@@ -1,40 +1,34 @@
-#include "MRattleLangevinIntegratorProxy.h"
+#include "RigidBodyIntegratorProxy.h"
 #include "MRattleLangevinIntegrator.h"
-#include "RigidBodyIntegratorSerialization.h"
 #include "openmm/OpenMMException.h"
 #include <memory>
 
 using namespace MRattlePlugin;
 using namespace OpenMM;
 
-static const char* const TypeName = "MRattleLangevinIntegrator";
+// MRattleLangevinIntegrator's own settings in its XML: temperature, friction, random seed.
 
-MRattleLangevinIntegratorProxy::MRattleLangevinIntegratorProxy() : SerializationProxy(TypeName) {
-}
-
-void MRattleLangevinIntegratorProxy::serialize(const void* object, SerializationNode& node) const {
-    const MRattleLangevinIntegrator& integrator =
-        *static_cast<const MRattleLangevinIntegrator*>(reinterpret_cast<const Integrator*>(object));
-    node.setIntProperty("version", Version);
+template <>
+void RigidBodyIntegratorProxy<MRattleLangevinIntegrator>::writeOwnSettings(const MRattleLangevinIntegrator& integrator,
+                                                                           SerializationNode& node) {
     node.setDoubleProperty("temperature", integrator.getTemperature());
     node.setDoubleProperty("friction", integrator.getFriction());
     node.setIntProperty("randomSeed", integrator.getRandomNumberSeed());
-    RigidBodyIntegratorSerialization::serialize(integrator, node);
 }
 
-void* MRattleLangevinIntegratorProxy::deserialize(const SerializationNode& node) const {
-    RigidBodyIntegratorSerialization::checkVersion(node, TypeName, Version);
-    const double temperature = RigidBodyIntegratorSerialization::getDouble(node, "temperature", TypeName);
-    const double friction = RigidBodyIntegratorSerialization::getDouble(node, "friction", TypeName);
+template <>
+MRattleLangevinIntegrator* RigidBodyIntegratorProxy<MRattleLangevinIntegrator>::create(const SerializationNode& node,
+                                                                                       const std::string& typeName) {
+    const double temperature = RigidBodyIntegratorSerialization::getDouble(node, "temperature", typeName);
+    const double friction = RigidBodyIntegratorSerialization::getDouble(node, "friction", typeName);
     // Outside the try: its message already names the type.
-    const double stepSize = RigidBodyIntegratorSerialization::getStepSize(node, TypeName);
+    const double stepSize = RigidBodyIntegratorSerialization::getStepSize(node, typeName);
     std::unique_ptr<MRattleLangevinIntegrator> integrator;
     try {
         integrator.reset(new MRattleLangevinIntegrator(temperature, friction, stepSize));
     } catch (const OpenMMException& e) {
-        throw OpenMMException(std::string(TypeName) + " XML: " + e.what());
+        throw OpenMMException(typeName + " XML: " + e.what());
     }
-    integrator->setRandomNumberSeed(RigidBodyIntegratorSerialization::getInteger(node, "randomSeed", TypeName));
-    RigidBodyIntegratorSerialization::deserialize(node, TypeName, *integrator);
-    return static_cast<Integrator*>(integrator.release());
+    integrator->setRandomNumberSeed(RigidBodyIntegratorSerialization::getInteger(node, "randomSeed", typeName));
+    return integrator.release();
 }

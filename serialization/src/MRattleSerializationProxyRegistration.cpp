@@ -1,9 +1,7 @@
 #include "MRattleIntegrator.h"
-#include "MRattleIntegratorProxy.h"
 #include "MRattleLangevinIntegrator.h"
-#include "MRattleLangevinIntegratorProxy.h"
+#include "RigidBodyIntegratorProxy.h"
 #include "RigidSplittingIntegrator.h"
-#include "RigidSplittingIntegratorProxy.h"
 #include "openmm/serialization/SerializationProxy.h"
 #include "internal/windowsExportMRattle.h"
 
@@ -24,8 +22,12 @@ extern "C" OPENMM_EXPORT_MRATTLE void __attribute__((constructor)) registerMRatt
 using namespace MRattlePlugin;
 using namespace OpenMM;
 
+/** Register the XML proxy of a RigidBodyIntegrator subclass under its class name: one line per integrator. */
+#define MRATTLE_REGISTER_PROXY(CLASS) \
+    SerializationProxy::registerProxy(typeid(CLASS), new RigidBodyIntegratorProxy<CLASS>(#CLASS))
+
 extern "C" OPENMM_EXPORT_MRATTLE void registerMRattleSerializationProxies() {
-    SerializationProxy::registerProxy(typeid(MRattleIntegrator), new MRattleIntegratorProxy());
-    SerializationProxy::registerProxy(typeid(RigidSplittingIntegrator), new RigidSplittingIntegratorProxy());
-    SerializationProxy::registerProxy(typeid(MRattleLangevinIntegrator), new MRattleLangevinIntegratorProxy());
+    MRATTLE_REGISTER_PROXY(MRattleIntegrator);
+    MRATTLE_REGISTER_PROXY(RigidSplittingIntegrator);
+    MRATTLE_REGISTER_PROXY(MRattleLangevinIntegrator);
 }
