@@ -280,6 +280,7 @@ TEST(MinimizerReference, NonFiniteEnergyIsNamedAndLeavesTheBestPoint) {
     MRattleIntegrator integrator(0.001);
     Context context(*cluster.system, integrator, platform("Reference"));
     context.setPositions(cluster.positions);
+    context.setVelocitiesToTemperature(300, 5);
     const double start = potentialEnergy(context);
     const std::string message = messageOf([&] { RigidBodyMinimizer::minimize(context, 1e-3); });
     EXPECT_NE(std::string::npos, message.find("potential energy is not finite")) << message;
@@ -288,6 +289,10 @@ TEST(MinimizerReference, NonFiniteEnergyIsNamedAndLeavesTheBestPoint) {
     EXPECT_TRUE(std::isfinite(left));
     EXPECT_LT(left, start);
     EXPECT_LT(maxDistanceChange(cluster.positions, positionsOf(context), cluster.molecules), 1e-12);
+    // The integrator saw the positions left: velocities rigid at them, and it steps.
+    EXPECT_LT(maxRigidityRate(context, cluster.molecules), 1e-10);
+    integrator.step(5);
+    EXPECT_LT(maxDistanceChange(cluster.positions, positionsOf(context), cluster.molecules), 1e-9);
 }
 
 TEST(MinimizerReference, BadArgumentsAndIterationLimit) {

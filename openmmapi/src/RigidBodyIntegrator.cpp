@@ -194,7 +194,7 @@ bool RigidBodyIntegrator::isCurrentIntegrator() const {
 
 void RigidBodyIntegrator::stateChanged(State::DataType changed) {
     forcesAreValid = false;
-    if (context == nullptr)
+    if (context == nullptr || (minimizing && changed == State::Positions))
         return;
     if (changed == State::Energy && loadingCheckpoint) {
         // OpenMM's last notification of a checkpoint load: continue as the run that wrote it.
