@@ -11,6 +11,7 @@ and the speed.
 """
 import argparse
 import os
+import sys
 import time
 
 import numpy as np
@@ -111,7 +112,9 @@ def main():
     rigidity = RigidityMonitor(integrator.getBodiesInEffect(), np.array(model.positions.value_in_unit(unit.nanometers)),
                                interval)
     simulation.reporters.append(rigidity)
-    simulation.reporters.append(mrattle.ProgressReporter(arguments.steps, max(1, arguments.steps//100)))
+    # Progress and time left on stderr: OpenMM's own reporter.
+    simulation.reporters.append(app.StateDataReporter(sys.stderr, max(1, arguments.steps//10), progress=True,
+                                                      remainingTime=True, speed=True, totalSteps=arguments.steps))
 
     start = time.time()
     simulation.step(arguments.steps)

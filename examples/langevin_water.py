@@ -3,13 +3,14 @@
 MonteCarloBarostat, on OpenMM's own water box (openmm/app/data/tip3p.pdb, 895 molecules,
 amber14/tip3p.xml, PME).
 
-Prints a progress bar, writes the temperature (rigid-body degrees of freedom), density and
-energies to a CSV file, and plots temperature and density against time.
+Prints the progress and time left (stderr), writes the temperature (rigid-body degrees of
+freedom), density and energies to a CSV file, and plots temperature and density against time.
 
     python3 examples/langevin_water.py --steps 25000 --output output
 """
 import argparse
 import os
+import sys
 
 import numpy as np
 import openmm
@@ -48,7 +49,9 @@ print('%d rigid waters, %d degrees of freedom, %s platform' % (integrator.getNum
 csvPath = os.path.join(arguments.output, 'langevin_water.csv')
 simulation.reporters.append(mrattle.StateDataReporter(csvPath, arguments.report_interval, step=True, time=True,
                                                       potentialEnergy=True, temperature=True, density=True, speed=True))
-simulation.reporters.append(mrattle.ProgressReporter(arguments.steps, max(1, arguments.steps//100)))
+# Progress and time left on stderr: OpenMM's own reporter.
+simulation.reporters.append(app.StateDataReporter(sys.stderr, max(1, arguments.steps//10), progress=True,
+                                                  remainingTime=True, speed=True, totalSteps=arguments.steps))
 simulation.step(arguments.steps)
 
 data = np.atleast_2d(np.genfromtxt(csvPath, delimiter=',', skip_header=1))

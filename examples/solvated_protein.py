@@ -6,12 +6,13 @@ constraints on bonds to hydrogen in the protein.
 The waters are declared rigid bodies (mrattle.declareRigidBodies); the protein's atoms are
 free particles, integrated like LangevinMiddleIntegrator with RATTLE for their H-bond
 constraints. Prints the temperature (rigid-body degrees of freedom) and how well the
-H-bond constraints and the waters' geometry hold, with a progress bar.
+H-bond constraints and the waters' geometry hold; the progress and time left go to stderr.
 
     python3 examples/solvated_protein.py --steps 1000
 """
 import argparse
 import os
+import sys
 
 import numpy as np
 import openmm
@@ -43,10 +44,13 @@ print('%d rigid waters, %d free (protein) atoms, %d H-bond constraints among the
          sum(1 for i in range(system.getNumConstraints())
              if system.getConstraintParameters(i)[0] in set(integrator.getFreeParticles())),
          integrator.getNumDegreesOfFreedom()))
-simulation.reporters.append(mrattle.ProgressReporter(arguments.steps, max(1, arguments.steps//100)))
+chunk = max(1, arguments.steps//10)
+# Progress and time left on stderr: OpenMM's own reporter.
+simulation.reporters.append(app.StateDataReporter(sys.stderr, chunk, progress=True, remainingTime=True, speed=True,
+                                                  totalSteps=10*chunk))
 temperatures = []
-for chunk in range(10):
-    simulation.step(max(1, arguments.steps//10))
+for block in range(10):
+    simulation.step(chunk)
     temperatures.append(integrator.computeSystemTemperature().value_in_unit(unit.kelvin))
 
 x = simulation.context.getState(getPositions=True).getPositions(asNumpy=True).value_in_unit(unit.nanometers)

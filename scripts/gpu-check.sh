@@ -4,7 +4,7 @@
 #   scripts/gpu-check.sh stage [BUILD_DIR]   here, after building against an OpenMM with CUDA
 #       (BUILD_DIR default ./build-cuda): copies what the GPU machine needs into ./.gpu/
 #       (ignored by git): OpenMM's libraries and CUDA platform plugin, the plugin's libraries,
-#       the C++ test programs and benchmarks/device_speed; refuses if that is over 60 MiB.
+#       the C++ test programs and benchmarks/cpp/device_speed; refuses if that is over 60 MiB.
 #   scripts/gpu-check.sh run                 on the GPU machine, from the repository root with
 #       .gpu/ carried: the C++ tests' CUDA cases, then device_speed (mixed precision, TIP3P
 #       boxes of 24,000, 98,304 and 985,527 atoms), within 8 minutes. Writes to $OUT (the
@@ -29,7 +29,7 @@ stage_files() {
     plugin_dir="$(cached OPENMM_PLUGIN_DIR)"
     cuda_plugin="$(find "$build/platforms/cuda" -name 'libMRattlePluginCUDA.so' 2>/dev/null | head -1)"
     [ -n "$cuda_plugin" ] || { echo "gpu-check: $build has no libMRattlePluginCUDA.so (configure with -DOPENMM_DIR=<an OpenMM built with CUDA> and build)"; exit 1; }
-    [ -f "$build/benchmarks/device_speed" ] || { echo "gpu-check: $build has no benchmarks/device_speed"; exit 1; }
+    [ -f "$build/benchmarks/cpp/device_speed" ] || { echo "gpu-check: $build has no benchmarks/cpp/device_speed"; exit 1; }
     rm -rf "$stage"
     mkdir -p "$stage/lib" "$stage/openmm-plugins" "$stage/bin"
     # OpenMM's core library (with its soname links) and its CUDA platform.
@@ -39,7 +39,7 @@ stage_files() {
     find "$build" -name 'libMRattlePlugin*.so*' -not -path '*/CMakeFiles/*' -exec cp -a {} "$stage/lib/" \;
     # The test programs (the generic suites name their CUDA cases *CUDA*) and the benchmark.
     local program
-    for program in "$build"/tests/Test* "$build/benchmarks/device_speed"; do
+    for program in "$build"/tests/Test* "$build/benchmarks/cpp/device_speed"; do
         if [ -f "$program" ] && [ -x "$program" ]; then
             cp "$program" "$stage/bin/"
         fi

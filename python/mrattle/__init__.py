@@ -11,7 +11,8 @@ can be used anywhere an OpenMM integrator can::
     simulation = openmm.app.Simulation(topology, system, integrator)
 
 The package also holds a StateDataReporter that reports the rigid-body temperature,
-a helper that removes interactions inside rigid bodies, and builders of test systems.
+a helper that removes interactions inside rigid bodies, builders of test systems, and the
+OpenMM-only RATTLE integrator the plugin is compared with (mrattle.baselines).
 """
 import os as _os
 
@@ -74,10 +75,10 @@ DEVICE_PLATFORMS = [platform for platform, kind, path in _plugin_location.PLATFO
 #: The Reference and CPU kernel plugin.
 PLUGIN_PATH = PLUGIN_PATHS['Reference']
 
-from .reporters import ProgressReporter, StateDataReporter, degreesOfFreedom, kineticTemperature
+from .reporters import StateDataReporter, degreesOfFreedom, kineticTemperature
 from .interactions import removeIntraBodyInteractions
 from .topology import rigidBodies, declareRigidBodies
-from . import models
+from . import models, baselines
 from .serialization import asPluginIntegrator, installXmlSerializerHooks as _installXmlSerializerHooks
 from .minimize import minimizeEnergy, RigidBodyMinimizer, installSimulationHook as _installSimulationHook
 
@@ -85,6 +86,6 @@ _installXmlSerializerHooks()
 _installSimulationHook()
 
 
-__all__ = ['RigidBodyIntegrator', 'MRattleIntegrator', 'MRattleLangevinIntegrator', 'RigidSplittingIntegrator', 'StateDataReporter', 'ProgressReporter', 'degreesOfFreedom',
-           'kineticTemperature', 'removeIntraBodyInteractions', 'rigidBodies', 'declareRigidBodies', 'asPluginIntegrator', 'minimizeEnergy', 'RigidBodyMinimizer', 'models', 'PLUGIN_PATH',
+__all__ = ['RigidBodyIntegrator', 'MRattleIntegrator', 'MRattleLangevinIntegrator', 'RigidSplittingIntegrator', 'StateDataReporter', 'degreesOfFreedom',
+           'kineticTemperature', 'removeIntraBodyInteractions', 'rigidBodies', 'declareRigidBodies', 'asPluginIntegrator', 'minimizeEnergy', 'RigidBodyMinimizer', 'models', 'baselines', 'PLUGIN_PATH',
            'PLUGIN_PATHS', 'PLATFORMS', 'DEVICE_PLATFORMS']

@@ -6,7 +6,7 @@ import xml.etree.ElementTree as ElementTree
 import openmm
 from openmm import unit
 
-from .integrators import RigidBodyIntegrator
+from .integrators import RigidBodyIntegrator, RigidBodyTopology
 
 # Bonded forces whose terms are dropped when every particle of a term is in one body:
 # force type -> (list element, term element). The particles of a term are its attributes
@@ -81,19 +81,23 @@ def removeIntraBodyInteractions(system, positions, bodies):
         it is bound to a Context, else its declared bodies, else the molecules it will make
         rigid), a list of bodies, or 'molecules' for every molecule of the System with two or
         more massive particles. Required: a default could remove the bonded terms of
-        particles that the integrator leaves free.
+        particles that the integrator leaves free. They are resolved by the integrators' own
+        rules (the C++ RigidBodyTopology, mrattle.integrators.RigidBodyTopology), so a list is
+        refused as a bound integrator would refuse it: an OpenMMException names the particle
+        out of range, listed in two bodies, massless or a virtual site, or joined by a
+        constraint to a particle outside its body.
 
     Returns
     -------
     openmm.System
         the new System
     """
-    bodyOfParticle = _bodyOfParticle(system, _resolveBodies(system, bodies))
+    bodyOfParticle = _bodyOfParticle(system, _bodyTopology(system, bodies))
     _checkFinitePositions(system, positions)
 
     def inOneBody(particles):
-        owner = bodyOfParticle.get(particles[0], -1)
-        return owner >= 0 and all(bodyOfParticle.get(p, -1) == owner for p in particles)
+        owner = bodyOfParticle[particles[0]]
+        return owner >= 0 and all(bodyOfParticle[p] == owner for p in particles)
 
     # Bonded terms are removed in the System's XML: OpenMM forces cannot delete terms, and
     # the XML keeps every other setting (parameters, groups, names) of every force.
@@ -113,12 +117,12 @@ def removeIntraBodyInteractions(system, positions, bodies):
     newSystem = openmm.XmlSerializer.deserialize(ElementTree.tostring(root, encoding='unicode'))
 
     bodyMembers = {}
-    for particle, body in bodyOfParticle.items():
-        if not system.isVirtualSite(particle):
+    for particle, body in enumerate(bodyOfParticle):
+        if body >= 0 and not system.isVirtualSite(particle):
             bodyMembers.setdefault(body, []).append(particle)
     _joinBodiesByConstraints(newSystem, bodyMembers.values(), positions)
-    for particle, body in bodyOfParticle.items():
-        if system.isVirtualSite(particle):
+    for particle, body in enumerate(bodyOfParticle):
+        if body >= 0 and system.isVirtualSite(particle):
             bodyMembers[body].append(particle)
     intraPairs = [(members[i], members[j]) for members in bodyMembers.values()
                   for i in range(len(members)) for j in range(i + 1, len(members))]
@@ -160,49 +164,53 @@ def _joinBodiesByConstraints(system, bodies, positions):
                 parent[root(previous)] = root(particle)
 
 
-def _resolveBodies(system, bodies):
+def _bodyTopology(system, bodies):
+    """The bodies as the integrator resolves them: the C++ RigidBodyTopology that every
+    rigid-body integrator builds when it is bound to a Context, made here from the System."""
     if bodies is None:
         raise TypeError("removeIntraBodyInteractions: pass the bodies: the integrator that will run the System, "
                         "a list of bodies, or 'molecules' for every molecule")
+    explicit = None
     if isinstance(bodies, RigidBodyIntegrator):
         try:
-            return bodies.getBodiesInEffect()
+            explicit = bodies.getBodiesInEffect()
         except openmm.OpenMMException:  # not bound to a Context: what it will use
-            if bodies.getNumRigidBodies() > 0:
-                return [bodies.getRigidBodyParticles(b) for b in range(bodies.getNumRigidBodies())]
-            bodies = 'molecules'
-    if isinstance(bodies, str):
+            explicit = [bodies.getRigidBodyParticles(b) for b in range(bodies.getNumRigidBodies())] or None
+    elif isinstance(bodies, str):
         if bodies != 'molecules':
             raise ValueError("removeIntraBodyInteractions: bodies must be a list, an integrator or 'molecules', got %r"
                              % bodies)
     else:
-        return [list(body) for body in bodies]
-    # OpenMM's molecules (bonds and constraints), from a throwaway Context.
+        explicit = [list(body) for body in bodies]
+    try:
+        if explicit is not None:
+            # Explicit bodies need no molecules (only a barostat's check, which the
+            # integrator makes when it is bound, reads them).
+            return RigidBodyTopology(system, explicit, [])
+        return RigidBodyTopology(system, [], _molecules(system))
+    except openmm.OpenMMException as error:
+        raise openmm.OpenMMException('removeIntraBodyInteractions: %s' % error) from None
+
+
+def _molecules(system):
+    """OpenMM's molecules (particles joined by bonds, constraints and virtual sites), as
+    Context.getMolecules() gives them. OpenMM finds them only in a Context: the bonds come
+    from each force's ForceImpl (getBondedParticles()), which exists only there; so a
+    throwaway Context on the Reference platform."""
     context = openmm.Context(system, openmm.VerletIntegrator(0.001), openmm.Platform.getPlatformByName('Reference'))
-    molecules = context.getMolecules()
+    molecules = [list(molecule) for molecule in context.getMolecules()]
     del context
-    return [[p for p in molecule if system.getParticleMass(p).value_in_unit(openmm.unit.dalton) > 0
-             and not system.isVirtualSite(p)] for molecule in molecules]
+    return molecules
 
 
-def _bodyOfParticle(system, bodies):
-    """particle -> body index, for bodies of 2+ particles plus the virtual sites built only from one body."""
-    owner = {}
-    for index, body in enumerate(bodies):
-        if len(body) < 2:
-            continue
-        for particle in body:
-            if particle < 0 or particle >= system.getNumParticles():
-                raise ValueError('removeIntraBodyInteractions: particle %d of body %d is out of range (%d particles)'
-                                 % (particle, index, system.getNumParticles()))
-            if particle in owner:
-                raise ValueError('removeIntraBodyInteractions: particle %d is in bodies %d and %d'
-                                 % (particle, owner[particle], index))
-            owner[particle] = index
+def _bodyOfParticle(system, topology):
+    """particle -> body index (-1: none): the topology's bodies (of 2+ particles), plus the
+    virtual sites built only from particles of one body."""
+    owner = topology.getBodyOfParticles()
     for particle in range(system.getNumParticles()):
         if system.isVirtualSite(particle):
             site = system.getVirtualSite(particle)
-            parents = {owner.get(site.getParticle(i), -1) for i in range(site.getNumParticles())}
+            parents = {owner[site.getParticle(i)] for i in range(site.getNumParticles())}
             if len(parents) == 1 and -1 not in parents:
                 owner[particle] = parents.pop()
     return owner

@@ -1,34 +1,28 @@
-"""Reporting with the rigid-body degrees of freedom, and a progress bar."""
-import sys
-import time
-
+"""Temperatures with the rigid-body degrees of freedom, and StateDataReporter columns for them."""
 import openmm
 from openmm import app, unit
 
-from .integrators import RigidBodyIntegrator
+from .integrators import RigidBodyIntegrator, RigidBodyTopology
 
 
 def degreesOfFreedom(simulationOrContext):
-    """Degrees of freedom as OpenMM counts them for the integrator in use.
+    """Degrees of freedom of a Context's System under its integrator.
 
-    For a RigidBodyIntegrator bound to the Context: 6 per rigid body (5 if linear), 3 per
+    For a RigidBodyIntegrator bound to the Context, its own count
+    (RigidBodyIntegrator.getNumDegreesOfFreedom()): 6 per rigid body (5 if linear), 3 per
     free particle, minus constraints among free particles, minus 3 with a CMMotionRemover.
-    For any other integrator: OpenMM's count (3 per massive particle, minus constraints,
-    minus 3 with a CMMotionRemover).
+    For any other integrator (VerletIntegrator with CCMA, a CustomIntegrator with
+    constraints, ...) the same rule with no body, which is OpenMM's count: 3 per massive
+    particle, minus each constraint with a massive end, minus 3 with a CMMotionRemover. Both
+    come from the C++ RigidBodyTopology, the integrators' one home of the count. Like
+    OpenMM's count, the second assumes independent constraints: constraining all 66 pair
+    distances of a 12-atom molecule removes 30 degrees of freedom, not 66.
     """
     context = getattr(simulationOrContext, 'context', simulationOrContext)
     integrator = context.getIntegrator()
     if isinstance(integrator, RigidBodyIntegrator):
         return integrator.getNumDegreesOfFreedom()
-    system = context.getSystem()
-    dof = sum(3 for i in range(system.getNumParticles()) if system.getParticleMass(i) > 0*unit.dalton)
-    for i in range(system.getNumConstraints()):
-        p1, p2, distance = system.getConstraintParameters(i)
-        if system.getParticleMass(p1) > 0*unit.dalton or system.getParticleMass(p2) > 0*unit.dalton:
-            dof -= 1
-    if any(isinstance(system.getForce(i), openmm.CMMotionRemover) for i in range(system.getNumForces())):
-        dof -= 3
-    return dof
+    return RigidBodyTopology(context.getSystem(), [], []).getNumDegreesOfFreedom(0)
 
 
 def kineticTemperature(simulationOrContext, state=None):
@@ -39,14 +33,36 @@ def kineticTemperature(simulationOrContext, state=None):
     return (2*state.getKineticEnergy()/(degreesOfFreedom(context)*unit.MOLAR_GAS_CONSTANT_R)).in_units_of(unit.kelvin)
 
 
-class StateDataReporter(app.StateDataReporter):
-    """openmm.app.StateDataReporter whose temperature uses the rigid-body degrees of freedom,
-    with columns for the rigid bodies' translational and rotational temperatures.
+#: Whether OpenMM's own StateDataReporter takes the temperature from the integrator's
+#: computeSystemTemperature() when it has one (OpenMM 8.0 on, openmm/openmm#3486), as the
+#: plugin's integrators do, so that it reports the rigid-body temperature. OpenMM 7.7's
+#: divides by 3 per particle minus constraints instead, 6 times too many for a rigid benzene.
+STOCK_REPORTER_ASKS_INTEGRATOR = int(openmm.version.short_version.split('.')[0]) >= 8
 
-    OpenMM's reporter counts 3 degrees of freedom per particle minus constraints, which is
-    wrong for rigid bodies (a rigid benzene has 6, not 36 - 0). With a RigidBodyIntegrator
-    (such as MRattleIntegrator) this reporter asks the integrator instead; with any other
-    integrator it behaves exactly like OpenMM's. It takes the same arguments, and:
+if STOCK_REPORTER_ASKS_INTEGRATOR:
+    _TemperatureReporter = app.StateDataReporter
+else:
+    class _TemperatureReporter(app.StateDataReporter):
+        """OpenMM 7.7's StateDataReporter with the degrees of freedom of a RigidBodyIntegrator."""
+
+        def _initializeConstants(self, simulation):
+            # OpenMM 7.7 counts the degrees of freedom here, into self._dof, which its
+            # _constructReportValues divides by; it has no public way to be given them.
+            super()._initializeConstants(simulation)
+            if self._temperature and isinstance(simulation.integrator, RigidBodyIntegrator):
+                self._dof = simulation.integrator.getNumDegreesOfFreedom()
+
+
+class StateDataReporter(_TemperatureReporter):
+    """openmm.app.StateDataReporter reporting the rigid-body temperature, with columns for
+    the rigid bodies' translational and rotational temperatures.
+
+    On OpenMM 8 and later this is OpenMM's reporter with only the two columns added: OpenMM's
+    own reports the rigid-body temperature (it asks the integrator's
+    computeSystemTemperature()). On OpenMM 7.7, whose reporter counts 3 degrees of freedom
+    per particle minus constraints (a rigid benzene has 6, not 36), it also takes the count
+    from a RigidBodyIntegrator (such as MRattleIntegrator). With any other integrator it
+    behaves exactly like OpenMM's. It takes the same arguments, and:
 
     translationalTemperature : bool=False
         write the bodies' translational temperature (RigidBodyIntegrator.computeTranslationalTemperature())
@@ -65,16 +81,15 @@ class StateDataReporter(app.StateDataReporter):
             (translationalTemperature, 'Translational Temperature (K)', 'computeTranslationalTemperature'),
             (rotationalTemperature, 'Rotational Temperature (K)', 'computeRotationalTemperature')) if flag]
 
-    def _initializeConstants(self, simulation):
-        super()._initializeConstants(simulation)
-        rigid = isinstance(simulation.integrator, RigidBodyIntegrator)
-        if self._temperature and rigid:
-            self._dof = simulation.integrator.getNumDegreesOfFreedom()
-        if self._bodyColumns and not rigid:
+    def report(self, simulation, state):
+        if self._bodyColumns and not isinstance(simulation.integrator, RigidBodyIntegrator):
             raise ValueError('StateDataReporter: the translationalTemperature and rotationalTemperature columns need a '
                              'RigidBodyIntegrator (such as mrattle.MRattleIntegrator); the Simulation has a %s'
                              % type(simulation.integrator).__name__)
-        self._bodyIntegrator = simulation.integrator
+        super().report(simulation, state)
+
+    # OpenMM's StateDataReporter has no public way to add columns: the two below extend the
+    # methods that make its header and its rows.
 
     def _bodyColumnIndex(self, headers):
         """Where the new columns go: after Temperature, or after the energies before it."""
@@ -95,32 +110,5 @@ class StateDataReporter(app.StateDataReporter):
         if not self._bodyColumns:
             return values
         index = self._bodyIndex
-        extra = [getattr(self._bodyIntegrator, method)().value_in_unit(unit.kelvin) for _, method in self._bodyColumns]
+        extra = [getattr(simulation.integrator, method)().value_in_unit(unit.kelvin) for _, method in self._bodyColumns]
         return values[:index] + extra + values[index:]
-
-
-class ProgressReporter(object):
-    """A reporter drawing a progress bar with the time left on stderr (in a log file, one line per 10%)."""
-
-    def __init__(self, totalSteps, interval, stream=sys.stderr, width=40):
-        self.totalSteps, self.interval, self.stream, self.width = totalSteps, interval, stream, width
-        self.startTime = time.time()
-        # Redrawing in place needs a terminal; in a log file, one line per 10%.
-        self.interactive = hasattr(stream, 'isatty') and stream.isatty()
-        self.lastTenth = -1
-
-    def describeNextReport(self, simulation):
-        return (self.interval - simulation.currentStep % self.interval, False, False, False, False)
-
-    def report(self, simulation, state):
-        fraction = min(1.0, simulation.currentStep/self.totalSteps)
-        filled = int(round(self.width*fraction))
-        elapsed = time.time() - self.startTime
-        remaining = elapsed*(1 - fraction)/fraction if fraction > 0 else 0
-        bar = '[%s%s] %3.0f%%  %5.1f s left ' % ('#'*filled, '.'*(self.width - filled), 100*fraction, remaining)
-        if self.interactive:
-            self.stream.write('\r' + bar + ('\n' if simulation.currentStep >= self.totalSteps else ''))
-        elif int(10*fraction) > self.lastTenth:
-            self.lastTenth = int(10*fraction)
-            self.stream.write(bar + '\n')
-        self.stream.flush()

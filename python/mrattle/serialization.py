@@ -1,4 +1,4 @@
-"""openmm.XmlSerializer, copy and pickle give back the plugin's integrator classes."""
+"""openmm.XmlSerializer (and so app.Simulation, copy and pickle) gives back the plugin's integrator classes."""
 import openmm
 
 from . import integrators
@@ -44,10 +44,27 @@ def _returningPluginIntegrators(function, checkDocument=False):
 
 
 def installXmlSerializerHooks():
-    """Make XmlSerializer.deserialize/clone (and so copy.deepcopy and pickle) of the plugin's
-    integrators return mrattle classes. Idempotent."""
+    """Make XmlSerializer.deserialize and clone of the plugin's integrators return mrattle
+    classes (so app.Simulation given an integrator's XML file gets one too), and run the XML
+    check on integrator documents first (pickle's loads go through it). Idempotent.
+
+    OpenMM has no public mechanism for either. The Python class of an integrator that its
+    XmlSerializer makes is chosen inside OpenMM's compiled wrappers, from a fixed list of
+    OpenMM's own classes (SWIG %factory) that a plugin cannot extend. Its public deserialize()
+    and clone() pick a function per kind of object; the integrators' are _deserializeIntegrator
+    and _cloneIntegrator (the same names in OpenMM 7.7 and 8.x), so wrapping those two touches
+    integrators only: wrapping the public functions instead would also put the check in front
+    of every System, State and Force document. Where an OpenMM lacks one of the two, that one
+    is left alone and a warning says what is lost.
+    """
     for name in ('_deserializeIntegrator', '_cloneIntegrator'):
-        function = getattr(openmm.XmlSerializer, name)
+        function = getattr(openmm.XmlSerializer, name, None)
+        if function is None:
+            import warnings
+            warnings.warn('mrattle: this OpenMM (%s) has no XmlSerializer.%s: XmlSerializer.deserialize and clone '
+                          'return its integrators as plain openmm.Integrator; mrattle.asPluginIntegrator() gives '
+                          'the plugin\'s class back' % (openmm.version.version, name))
+            continue
         if not getattr(function, '_mrattleWrapped', False):
             setattr(openmm.XmlSerializer, name,
                     _returningPluginIntegrators(function, checkDocument=(name == '_deserializeIntegrator')))

@@ -245,3 +245,5 @@ PyObject* _pluginIntegratorProxy(OpenMM::Integrator* integrator) {
     Py_RETURN_NONE;
 }
 %}
+
+%include "topology.i"

@@ -9,7 +9,8 @@ import mrattle
 ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
 # The build tree's package lives in <build>/python/mrattle.
 BUILD = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(mrattle.__file__))))
-sys.path.insert(0, os.path.join(ROOT, "benchmarks"))  # run_suite and the suite package
+SUITE = os.path.join(ROOT, "benchmarks", "python")
+sys.path.insert(0, SUITE)  # run_suite, report and the suite package
 
 
 def read(path):
@@ -19,9 +20,9 @@ def read(path):
 
 def test_quick_suite_writes_every_section(tmp_path):
     # The cost section needs the C++ step_cost program, built unless MRATTLE_BUILD_BENCHMARKS=OFF.
-    has_step_cost = os.path.exists(os.path.join(BUILD, "benchmarks", "step_cost"))
+    has_step_cost = os.path.exists(os.path.join(BUILD, "benchmarks", "cpp", "step_cost"))
     parts = "accuracy,cost,sampling,gains" if has_step_cost else "accuracy,sampling,gains"
-    subprocess.run([sys.executable, os.path.join(ROOT, "benchmarks", "run_suite.py"), "--quick", "--build", BUILD,
+    subprocess.run([sys.executable, os.path.join(SUITE, "run_suite.py"), "--quick", "--build", BUILD,
                     "--out", str(tmp_path), "--only", parts], check=True, timeout=600)
     text = (tmp_path / "results.md").read_text()
     for heading in ("## Accuracy", "## Sampling", "## What a user gains") + (("## Cost per step",) if has_step_cost else ()):
@@ -81,10 +82,10 @@ def test_quick_suite_writes_every_section(tmp_path):
 
 
 def test_a_partial_run_replaces_only_its_own_sections():
-    import run_suite
+    import report
     existing = "# Results\n\nintro\n\n## Cost\n\nold cost\n\n## Accuracy\n\nold accuracy\n### Sub\nold\n" \
                "\n## Sampling\n\nold sampling\n\nTotal wall time of this run: 3.0 minutes.\n"
-    merged = run_suite.splice_sections(existing, "\n## Accuracy\n\nnew accuracy\n\n## Extra\n\nnew extra\n", "*stamp*\n")
+    merged = report.splice_sections(existing, "\n## Accuracy\n\nnew accuracy\n\n## Extra\n\nnew extra\n", "*stamp*\n")
     assert "old accuracy" not in merged and "### Sub" not in merged and "new accuracy" in merged
     assert merged.index("## Cost") < merged.index("## Accuracy") < merged.index("## Sampling") < merged.index("## Extra")
     assert "old cost" in merged and "old sampling" in merged and merged.startswith("# Results\n\nintro")
@@ -93,7 +94,7 @@ def test_a_partial_run_replaces_only_its_own_sections():
 
 
 def test_quick_langevin_validation_writes_its_section(tmp_path):
-    subprocess.run([sys.executable, os.path.join(ROOT, "benchmarks", "run_suite.py"), "--quick", "--build", BUILD,
+    subprocess.run([sys.executable, os.path.join(SUITE, "run_suite.py"), "--quick", "--build", BUILD,
                     "--out", str(tmp_path), "--only", "langevin"], check=True, timeout=600)
     text = (tmp_path / "results.md").read_text()
     assert "## Langevin dynamics with M-RATTLE" in text and "density at 1 bar" in text and "liquid benzene" in text
@@ -136,7 +137,7 @@ def test_a_rigid_step_counts_as_stable_only_within_its_error_bars():
 
 
 def test_quick_long_drift_gives_finite_drifts_with_error_bars(tmp_path):
-    subprocess.run([sys.executable, os.path.join(ROOT, "benchmarks", "run_suite.py"), "--quick", "--build", BUILD,
+    subprocess.run([sys.executable, os.path.join(SUITE, "run_suite.py"), "--quick", "--build", BUILD,
                     "--out", str(tmp_path), "--only", "drift"], check=True, timeout=300)
     text = (tmp_path / "results.md").read_text()
     assert "## Long-run energy drift" in text and "consistent with zero within 2 standard errors" in text
@@ -188,7 +189,7 @@ def test_net_motion_removal_zeroes_momentum_and_angular_momentum_and_keeps_bodie
 
 
 def test_drift_verdicts_follow_the_error_bars():
-    import run_suite
+    import report
     from suite import long_drift
     assert long_drift.verdict(0.03, 0.02) == "consistent with zero within 2 SE"
     assert long_drift.verdict(-0.05, 0.02).startswith("nonzero (loss")
@@ -198,10 +199,10 @@ def test_drift_verdicts_follow_the_error_bars():
         return {"method": method, "step_fs": 4.0, "seed": seed, "drift_per_ns": drift, "drift_error_per_ns": error,
                 "departed": 0}
     small = [row("M-RATTLE", 0.004, 0.005), row("splitting", -0.002, 0.004)]
-    text = "".join(run_suite.long_drift_reading(small))
+    text = "".join(report.long_drift_reading(small))
     assert "2 of 2 runs have a drift consistent with zero" in text and "agree with the independent" in text
     large = [row("M-RATTLE", 0.004, 0.02), row("splitting", 0.1, 0.01)]
-    text = "".join(run_suite.long_drift_reading(large))
+    text = "".join(report.long_drift_reading(large))
     assert "1 of 2 runs" in text and "cannot confirm" in text and "in 1 of 1 cases" in text
     assert "splitting 4 fs seed 1 is 10.0 SE from zero" in text and "exceeds it by more than 2 SE" in text
 
@@ -232,9 +233,22 @@ def test_speed_target_rows_count_what_was_met():
 
 
 def test_sampling_verdict_counts_standard_errors_of_the_difference():
-    import run_suite
+    import report
     rows = [{"quantity": "a", "M-RATTLE mean": 1.0, "splitting mean": 1.5, "spread of run means": 0.5},
             {"quantity": "b", "M-RATTLE mean": 1.0, "splitting mean": 2.0, "spread of run means": 0.5}]
-    text = "".join(run_suite.sampling_verdict(rows, 8))   # SE = 0.5 * sqrt(2/8) = 0.25
+    text = "".join(report.sampling_verdict(rows, 8))   # SE = 0.5 * sqrt(2/8) = 0.25
     assert "- a: difference 0.5, standard error 0.25: 2.0 SE, within 2 SE" in text
     assert "- b: difference 1, standard error 0.25: 4.0 SE, beyond 2 SE" in text
+
+
+def test_every_method_counts_degrees_of_freedom_with_the_package():
+    """One count for the four methods the suite compares: the plugin's from the integrator,
+    the constrained baselines' as OpenMM counts them (9 independent constraints per 5-site
+    molecule: 6 left each, as for the rigid body)."""
+    from suite import common
+    system, positions, bodies = common.tetrahedral_cluster(num_per_side=2, constraints=9)
+    velocities = common.rigid_velocities(system, positions, bodies, 200.0)
+    for method in ("M-RATTLE", "splitting", "RATTLE (CustomIntegrator)", "Verlet + CCMA"):
+        run = common.nve_run(system, positions, velocities, method, 0.001, 0.002, 0.001, "Reference", bodies)
+        assert run["failure"] is None
+        assert run["dof"] == 6*8 == mrattle.degreesOfFreedom(run["context"])

@@ -112,10 +112,10 @@ def test_langevin_parts_use_its_half_step_velocities():
 
 
 def test_benchmark_suite_formula_is_the_integrators():
-    """benchmarks/suite/equipartition.py splits every integrator's velocities itself: on
+    """benchmarks/python/suite/equipartition.py splits every integrator's velocities itself: on
     M-RATTLE's (rigid) velocities it gives the integrator's own numbers; on velocities that are
     not rigid it first projects them, which keeps the translational part."""
-    sys.path.insert(0, os.path.join(ROOT, 'benchmarks'))
+    sys.path.insert(0, os.path.join(ROOT, 'benchmarks', 'python'))
     from suite import equipartition
     simulation = waterSimulation(openmm.Platform.getPlatformByName('Reference'))
     simulation.context.setVelocitiesToTemperature(300*unit.kelvin, 8)
@@ -141,7 +141,7 @@ def test_benchmark_suite_formula_is_the_integrators():
 
 def test_benchmark_suite_equipartition_run_and_report():
     """A few steps of one run of the equipartition benchmark, through to its table."""
-    sys.path.insert(0, os.path.join(ROOT, 'benchmarks'))
+    sys.path.insert(0, os.path.join(ROOT, 'benchmarks', 'python'))
     from suite import equipartition
     system, positions, bodies = equipartition.water('spce.pdb', 'amber14/spce.xml')
     start = equipartition.equilibrate(system, positions, 0.004, threads=1)

@@ -73,7 +73,7 @@ def test_checkpoint_continues_bit_for_bit(platform, tmp_path):
     continued = simulation.context.getState(getPositions=True).getPositions(asNumpy=True).value_in_unit(unit.nanometers)
     if platform.getName() == 'Reference':
         assert np.array_equal(uninterrupted, continued)
-    else:  # the CPU neighbour list: round-off (README)
+    else:  # the CPU neighbour list: round-off (docs/serialization.md)
         assert np.abs(uninterrupted - continued).max() < 1e-4
 
 

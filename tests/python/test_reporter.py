@@ -64,10 +64,51 @@ def test_builder_velocities_are_at_the_temperature():
     assert mrattle.kineticTemperature(context).value_in_unit(unit.kelvin) == pytest.approx(123, rel=1e-10)
 
 
+def test_temperature_fix_only_where_openmm_needs_it():
+    """OpenMM 8's own StateDataReporter asks the integrator (computeSystemTemperature()), so
+    mrattle's then only adds its columns; only on 7.x does it replace the count."""
+    stock = app.StateDataReporter
+    overriding = [cls for cls in mrattle.StateDataReporter.__mro__ if cls is not stock and '_initializeConstants' in vars(cls)]
+    assert mrattle.reporters.STOCK_REPORTER_ASKS_INTEGRATOR == (openmmVersion() >= (8, 0))
+    if openmmVersion() >= (8, 0):
+        assert mrattle.reporters._TemperatureReporter is stock
+        assert overriding == []
+    else:
+        assert overriding == [mrattle.reporters._TemperatureReporter]
+    assert issubclass(mrattle.StateDataReporter, stock)
+
+
+@pytest.mark.parametrize('makeIntegrator', [lambda: openmm.VerletIntegrator(0.001),
+                                            lambda: mrattle.baselines.rattleVerletIntegrator(0.001)],
+                         ids=['Verlet+CCMA', 'RATTLE CustomIntegrator'])
+@pytest.mark.parametrize('removeMotion', [False, True])
+def test_constrained_baselines_count_as_openmm_reports(makeIntegrator, removeMotion):
+    """The benchmark suite's constrained baselines: degreesOfFreedom is what OpenMM's own
+    StateDataReporter divides by (3 per particle, minus constraints, minus 3 with a CMMotionRemover)."""
+    model = mrattle.models.waterBox(numMolecules=27, cutoff=0.45*unit.nanometers)
+    system = model.system
+    if removeMotion:
+        system.addForce(openmm.CMMotionRemover())
+    simulation = app.Simulation(model.topology, system, makeIntegrator(), openmm.Platform.getPlatformByName('Reference'))
+    simulation.context.setPositions(model.positions)
+    simulation.context.setVelocitiesToTemperature(300*unit.kelvin, 3)
+    dof = mrattle.degreesOfFreedom(simulation)
+    assert dof == 3*81 - 81 - (3 if removeMotion else 0)
+    log = io.StringIO()
+    rows = reportedRows(simulation, app.StateDataReporter(log, 2, kineticEnergy=True, temperature=True), log, 4)
+    boltzmann = unit.MOLAR_GAS_CONSTANT_R.value_in_unit(unit.kilojoules_per_mole/unit.kelvin)
+    np.testing.assert_allclose(2*rows[:, 0]/(rows[:, 1]*boltzmann), dof, rtol=1e-9)
+
+
 def test_other_integrators_use_openmm_count():
     system = openmm.System()
     for i in range(3):
         system.addParticle(1.0)
     system.addConstraint(0, 1, 0.1)
+    # A constraint between two massless particles takes nothing (OpenMM's count; the
+    # benchmark suite's own count, now gone, subtracted it).
+    system.addParticle(0.0)
+    system.addParticle(0.0)
+    system.addConstraint(3, 4, 0.1)
     context = openmm.Context(system, openmm.VerletIntegrator(0.001), openmm.Platform.getPlatformByName('Reference'))
     assert mrattle.degreesOfFreedom(context) == 8

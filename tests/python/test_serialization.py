@@ -115,3 +115,16 @@ def test_setters_refuse_values_that_are_not_finite():
     with pytest.raises(openmm.OpenMMException, match='finite'):
         integrator.setStepSize(float('inf'))
     assert integrator.getConstraintTolerance() == 1e-5
+
+
+def test_hooks_wrap_only_what_this_openmm_has(monkeypatch):
+    """The two private XmlSerializer functions are wrapped once; an OpenMM without one of
+    them gets a warning, not a failed import."""
+    for name in ('_deserializeIntegrator', '_cloneIntegrator'):
+        assert getattr(openmm.XmlSerializer, name)._mrattleWrapped
+    wrapped = openmm.XmlSerializer._deserializeIntegrator
+    mrattle._installXmlSerializerHooks()
+    assert openmm.XmlSerializer._deserializeIntegrator is wrapped  # idempotent
+    monkeypatch.delattr(openmm.XmlSerializer, '_cloneIntegrator')
+    with pytest.warns(UserWarning, match='has no XmlSerializer._cloneIntegrator'):
+        mrattle._installXmlSerializerHooks()

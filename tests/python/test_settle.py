@@ -1,24 +1,9 @@
-"""Rigid water: M-RATTLE against SETTLE in an OpenMM velocity-Verlet CustomIntegrator."""
+"""Rigid water: M-RATTLE against SETTLE in OpenMM's velocity-Verlet RATTLE (mrattle.baselines)."""
 import numpy as np
 import openmm
 from openmm import unit
 
 import mrattle
-
-
-def settleVelocityVerlet(stepSize):
-    """Velocity Verlet with RATTLE-style position and velocity constraints (SETTLE for water)."""
-    integrator = openmm.CustomIntegrator(stepSize)
-    integrator.addPerDofVariable('x1', 0)
-    integrator.addUpdateContextState()
-    integrator.addComputePerDof('v', 'v + 0.5*dt*f/m')
-    integrator.addComputePerDof('x', 'x + dt*v')
-    integrator.addComputePerDof('x1', 'x')
-    integrator.addConstrainPositions()
-    integrator.addComputePerDof('v', 'v + 0.5*dt*f/m + (x - x1)/dt')
-    integrator.addConstrainVelocities()
-    integrator.setConstraintTolerance(1e-12)
-    return integrator
 
 
 def test_rigid_water_matches_settle():
@@ -37,7 +22,7 @@ def test_rigid_water_matches_settle():
         rattle.step(50)
     mrattleContext.setVelocitiesToTemperature(300*unit.kelvin, 17)
     state = mrattleContext.getState(getPositions=True, getVelocities=True)
-    settle = settleVelocityVerlet(stepSize)
+    settle = mrattle.baselines.rattleVerletIntegrator(stepSize, 1e-12)  # SETTLE for the waters
     settleContext = openmm.Context(model.system, settle, reference)
     settleContext.setPositions(state.getPositions())
     settleContext.setVelocities(state.getVelocities())

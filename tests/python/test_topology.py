@@ -268,3 +268,36 @@ def test_atom_selection_errors():
         mrattle.rigidBodies(topology, system, 'PHE', group='domain')
     with pytest.raises(ValueError, match='no residue or atom'):
         mrattle.rigidBodies(topology, system, 'PHE', atoms=lambda atom: False)
+
+
+def test_python_resolves_bodies_with_the_integrators_rules():
+    """mrattle.integrators.RigidBodyTopology is the C++ class the integrators resolve their
+    bodies with: made from the System, it gives what a bound integrator has in effect."""
+    model = mrattle.models.waterBox(numMolecules=27, cutoff=0.45*unit.nanometers)
+    system = model.system
+    system.addForce(openmm.CMMotionRemover())
+    reference = openmm.Platform.getPlatformByName('Reference')
+    for declared in ([], [[0, 1, 2], [6, 7, 8]]):
+        integrator = mrattle.MRattleIntegrator(0.001)
+        for body in declared:
+            integrator.addRigidBody(body)
+        context = openmm.Context(system, integrator, reference)
+        context.setPositions(model.positions)
+        topology = mrattle.integrators.RigidBodyTopology(system, declared, context.getMolecules())
+        assert topology.getBodies() == integrator.getBodiesInEffect()
+        assert topology.getFreeParticles() == integrator.getFreeParticles()
+        owners = topology.getBodyOfParticles()
+        assert len(owners) == system.getNumParticles()
+        for index, body in enumerate(topology.getBodies()):
+            assert all(owners[particle] == index for particle in body)
+        assert all(owners[particle] == -1 for particle in topology.getFreeParticles())
+        # No body is linear: 6 each.
+        assert topology.getNumDegreesOfFreedom(6*topology.getNumBodies()) == integrator.getNumDegreesOfFreedom()
+        del context
+    # The same checks as addRigidBody's and the Context's, with the same messages.
+    with pytest.raises(openmm.OpenMMException, match='Particle 2 is listed in rigid bodies 0 and 1'):
+        mrattle.integrators.RigidBodyTopology(system, [[0, 1, 2], [2, 3]], [])
+    with pytest.raises(openmm.OpenMMException, match='lists particle 99, but the System has only 81 particles'):
+        mrattle.integrators.RigidBodyTopology(system, [[0, 99]], [])
+    with pytest.raises(TypeError):
+        mrattle.integrators.RigidBodyTopology(system, [[0, 'a']], [])

@@ -1,4 +1,4 @@
-"""Cost: time per step with forces excluded, from the C++ program benchmarks/step_cost."""
+"""Cost: time per step with forces excluded, from the C++ program benchmarks/cpp/step_cost."""
 import csv
 import io
 import subprocess

@@ -6,7 +6,7 @@ runs the C++ program minimize_compare (which times both minimizers from the same
 counts LocalEnergyMinimizer's iterations in a second, untimed run), then prints a Markdown
 table and writes docs/results/minimization.csv.
 
-    /usr/bin/python3 benchmarks/minimization.py [--build build] [--platform CPU] [--quick] [--only NAME] [--repeats 3]
+    /usr/bin/python3 benchmarks/python/minimization.py [--build build] [--platform CPU] [--quick] [--only NAME] [--repeats 3]
 """
 import argparse
 import csv
@@ -16,7 +16,7 @@ import subprocess
 import sys
 import tempfile
 
-root = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+root = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))  # benchmarks/python/ is two below
 
 
 def cases(quick):
@@ -60,7 +60,7 @@ def main():
     sys.path.insert(0, os.path.join(args.build, 'python'))
     import openmm
     from openmm import unit
-    program = os.path.join(args.build, 'benchmarks', 'minimize_compare')
+    program = os.path.join(args.build, 'benchmarks', 'cpp', 'minimize_compare')
     rows, notes = [], []
     for name, tolerance, build in cases(args.quick):
         if args.only and args.only not in name:

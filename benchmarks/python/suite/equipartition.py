@@ -10,7 +10,7 @@ each integrator (for OpenMM's leapfrog VerletIntegrator rebuilt from its half-st
 standard errors from block averages. Asthagiri & Beck (2024) found that NVE rigid SPC/E water reaches equipartition only
 at 0.5 fs, with the rotational temperature below the translational at 1-3 fs.
 
-    /usr/bin/python3 benchmarks/run_suite.py --only equipartition   # or ./benchmarks/run.sh --only equipartition
+    /usr/bin/python3 benchmarks/python/run_suite.py --only equipartition   # or ./benchmarks/run.sh --only equipartition
 """
 import csv
 import math
@@ -268,7 +268,7 @@ def report(rows, by_model, quick, equilibrate_ps, discard_ps, production_ps, sam
           'on its on-step velocities: OpenMM\'s `VerletIntegrator` is leapfrog, so its State velocities (half a '
           'step behind) get the half kick (h/2) f/m and the rigid-body projection, which gives velocity Verlet\'s '
           '(RATTLE\'s) on-step velocities; its State velocities as they are make a row of their own '
-          '(`benchmarks/suite/equipartition.py`, checked against `MRattleIntegrator`\'s own '
+          '(`benchmarks/python/suite/equipartition.py`, checked against `MRattleIntegrator`\'s own '
           '`computeTranslationalTemperature()` in `tests/python/test_kinetic_split.py`). Means +- standard '
           'errors from %d block averages; the difference T_rot - T_trans is block-averaged as one series '
           '(the two temperatures are anticorrelated in NVE). Drift: slope of the total energy, kJ/mol/ns per '

@@ -11,7 +11,7 @@ OpenMM's LangevinMiddleIntegrator with SETTLE on the same System:
 
 Means carry standard errors from block averages (10 blocks, each much longer than the
 correlation times). Writes a markdown report and a CSV. CPU platform.
-Usage: PYTHONPATH=build/python python3 benchmarks/langevin_validation.py [--quick] [--out docs/results/langevin]
+Usage: PYTHONPATH=build/python python3 benchmarks/python/langevin_validation.py [--quick] [--out docs/results/langevin]
 """
 import argparse
 import os

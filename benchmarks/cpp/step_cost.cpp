@@ -29,20 +29,18 @@
  * (default stderr) as CSV. Exit status 2 if any run diverged (non-finite state).
  */
 #include "BenchmarkShapes.h"
+#include "BenchmarkSupport.h"
 #include "MRattleBuildInfo.h"
 #include "MRattleIntegrator.h"
 #include "OpenMM.h"
 #include "RigidSplittingIntegrator.h"
 #include <algorithm>
-#include <chrono>
 #include <cmath>
 #include <cstdlib>
-#include <fstream>
 #include <iostream>
 #include <map>
 #include <set>
 #include <memory>
-#include <sstream>
 #include <string>
 #include <vector>
 
@@ -51,6 +49,7 @@ extern "C" void registerMRattleReferenceKernelFactories();
 using namespace OpenMM;
 using std::string;
 using std::vector;
+using namespace MRattleBenchmark;
 
 namespace {
 
@@ -64,23 +63,6 @@ struct Options {
     double batchSeconds = 0.05;
     vector<int> threads = {1};
 };
-
-vector<string> split(const string& text) {
-    vector<string> parts;
-    std::stringstream stream(text);
-    string part;
-    while (std::getline(stream, part, ','))
-        if (!part.empty())
-            parts.push_back(part);
-    return parts;
-}
-
-vector<int> splitInts(const string& text) {
-    vector<int> values;
-    for (const string& part : split(text))
-        values.push_back(std::stoi(part));
-    return values;
-}
 
 Options parse(int argc, char** argv) {
     Options options;
@@ -219,15 +201,9 @@ vector<Vec3> buildPositions(int numBodies, const MRattleBenchmark::Shape& shape)
 }
 
 double secondsFor(Integrator& integrator, int steps) {
-    auto start = std::chrono::steady_clock::now();
+    Clock::time_point start = Clock::now();
     integrator.step(steps);
-    return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-}
-
-double median(vector<double> values) {
-    std::sort(values.begin(), values.end());
-    size_t n = values.size();
-    return n % 2 == 1 ? values[n / 2] : 0.5 * (values[n / 2 - 1] + values[n / 2]);
+    return secondsSince(start);
 }
 
 } // namespace
@@ -240,13 +216,9 @@ int main(int argc, char** argv) {
         setenv("OPENMM_PLUGIN_DIR", MRATTLE_OPENMM_PLUGIN_DIR, 0);
         Platform::loadPluginsFromDirectory(Platform::getDefaultPluginsDirectory());
         registerMRattleReferenceKernelFactories();
-        std::ofstream outFile, ratioFile;
-        if (!options.out.empty())
-            outFile.open(options.out);
-        if (!options.ratios.empty())
-            ratioFile.open(options.ratios);
-        std::ostream& out = options.out.empty() ? std::cout : outFile;
-        std::ostream& ratios = options.ratios.empty() ? std::cerr : ratioFile;
+        CsvOutputs csv(options.out, options.ratios);
+        std::ostream& out = csv.out;
+        std::ostream& ratios = csv.ratios;
         out << "platform,integrator,atoms_per_body,bodies,atoms,constraints_per_body,steps_per_batch,batches,"
                "median_us_per_step,min_us_per_step,max_us_per_step,median_ns_per_atom_step,finite,threads\n";
         ratios << "platform,atoms_per_body,bodies,ratio,value,target,met\n";

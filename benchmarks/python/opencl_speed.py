@@ -7,7 +7,7 @@ remains).
 
 Through pocl on a CPU the numbers are ratios only: a GPU's absolute speeds differ by orders
 of magnitude. Usage (from the build tree's package):
-    PYTHONPATH=build/python python3 benchmarks/opencl_speed.py [--waters 512] [--out docs/results/opencl_speed.csv]
+    PYTHONPATH=build/python python3 benchmarks/python/opencl_speed.py [--waters 512] [--out docs/results/opencl_speed.csv]
 """
 import argparse
 import csv

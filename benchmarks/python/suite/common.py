@@ -19,22 +19,6 @@ def platform(name, threads=None):
     return openmm.Platform.getPlatformByName(name), properties
 
 
-def rattle_integrator(step_ps, tolerance=1e-10):
-    """RATTLE through OpenMM itself: velocity Verlet with constrained positions and velocities."""
-    integrator = openmm.CustomIntegrator(step_ps)
-    integrator.setConstraintTolerance(tolerance)
-    integrator.addPerDofVariable("x0", 0)
-    integrator.addUpdateContextState()
-    integrator.addComputePerDof("v", "v+0.5*dt*f/m")
-    integrator.addComputePerDof("x0", "x")
-    integrator.addComputePerDof("x", "x+dt*v")
-    integrator.addConstrainPositions()
-    integrator.addComputePerDof("v", "(x-x0)/dt")
-    integrator.addComputePerDof("v", "v+0.5*dt*f/m")
-    integrator.addConstrainVelocities()
-    return integrator
-
-
 def make_integrator(method, step_ps, tolerance=1e-10, bodies=None):
     """Integrators compared in the suite, by name; the plugin's get `bodies` declared."""
     if method in ("M-RATTLE", "splitting"):
@@ -43,24 +27,12 @@ def make_integrator(method, step_ps, tolerance=1e-10, bodies=None):
             integrator.addRigidBody(body)
         return integrator
     if method == "RATTLE (CustomIntegrator)":
-        return rattle_integrator(step_ps, tolerance)
+        return mrattle.baselines.rattleVerletIntegrator(step_ps, tolerance)
     if method == "Verlet + CCMA":
         integrator = openmm.VerletIntegrator(step_ps)
         integrator.setConstraintTolerance(tolerance)
         return integrator
     raise ValueError("unknown method %r" % method)
-
-
-def degrees_of_freedom(context, integrator):
-    """Rigid-body DOF for the plugin's integrators; OpenMM's count otherwise."""
-    if isinstance(integrator, mrattle.RigidBodyIntegrator):
-        return integrator.getNumDegreesOfFreedom()
-    system = context.getSystem()
-    dof = sum(3 for i in range(system.getNumParticles()) if system.getParticleMass(i) > 0*unit.dalton)
-    dof -= system.getNumConstraints()
-    if any(isinstance(system.getForce(i), openmm.CMMotionRemover) for i in range(system.getNumForces())):
-        dof -= 3
-    return dof
 
 
 def intra_distances(positions, bodies):
@@ -89,7 +61,7 @@ def nve_run(system, positions, velocities, method, step_ps, total_ps, sample_ps,
         context.setVelocities(velocities)
     stride = max(1, int(round(sample_ps / step_ps)))
     samples = max(1, int(round(total_ps / (stride * step_ps))))
-    dof = degrees_of_freedom(context, integrator)
+    dof = mrattle.degreesOfFreedom(context)
     times, kinetic, potential, rigidity = [], [], [], []
     reference = None
     failure = None

@@ -32,31 +32,28 @@
  * Exit status 2 if a run diverged or lost its geometry, 3 if the platform or the plugin's
  * kernels on it are not there, 4 if the budget left a group out.
  */
+#include "BenchmarkSupport.h"
 #include "MRattleBuildInfo.h"
 #include "MRattleIntegrator.h"
 #include "MRattleLangevinIntegrator.h"
 #include "OpenMM.h"
 #include <algorithm>
-#include <chrono>
 #include <cmath>
 #include <cstdlib>
-#include <fstream>
 #include <iomanip>
 #include <iostream>
 #include <map>
 #include <memory>
 #include <random>
-#include <sstream>
 #include <string>
 #include <vector>
 
 using namespace OpenMM;
 using std::string;
 using std::vector;
+using namespace MRattleBenchmark;
 
 namespace {
-
-using Clock = std::chrono::steady_clock;
 
 struct Options {
     string platform = "CUDA", precision = "mixed", out, ratios;
@@ -65,16 +62,6 @@ struct Options {
     int repeats = 3, warmup = 50;
     double batchSeconds = 0.5, budget = 0;
 };
-
-vector<string> split(const string& text) {
-    vector<string> parts;
-    std::stringstream stream(text);
-    string part;
-    while (std::getline(stream, part, ','))
-        if (!part.empty())
-            parts.push_back(part);
-    return parts;
-}
 
 Options parse(int argc, char** argv) {
     Options options;
@@ -263,10 +250,6 @@ struct Run {
     vector<double> secondsPerStep;
 };
 
-double seconds(Clock::time_point since) {
-    return std::chrono::duration<double>(Clock::now() - since).count();
-}
-
 /** Time to download the positions alone (the synchronisation ending each batch). */
 double syncSeconds(Context& context) {
     context.getState(State::Positions);
@@ -274,7 +257,7 @@ double syncSeconds(Context& context) {
     for (int i = 0; i < 3; i++) {
         Clock::time_point start = Clock::now();
         context.getState(State::Positions);
-        times.push_back(seconds(start));
+        times.push_back(secondsSince(start));
     }
     return *std::min_element(times.begin(), times.end());
 }
@@ -284,13 +267,7 @@ double timeBatch(Run& run, int steps, double sync) {
     Clock::time_point start = Clock::now();
     run.integrator->step(steps);
     run.context->getState(State::Positions);
-    return std::max(0.0, seconds(start) - sync) / steps;
-}
-
-double median(vector<double> values) {
-    std::sort(values.begin(), values.end());
-    size_t n = values.size();
-    return n % 2 == 1 ? values[n / 2] : 0.5 * (values[n / 2 - 1] + values[n / 2]);
+    return std::max(0.0, secondsSince(start) - sync) / steps;
 }
 
 /** Largest error (nm) of any O-H or H-H distance, or infinity if a position is not finite. */
@@ -347,13 +324,9 @@ int main(int argc, char** argv) {
                       << " (give their library with --plugins)\n";
             return 3;
         }
-        std::ofstream outFile, ratioFile;
-        if (!options.out.empty())
-            outFile.open(options.out);
-        if (!options.ratios.empty())
-            ratioFile.open(options.ratios);
-        std::ostream& out = options.out.empty() ? std::cout : outFile;
-        std::ostream& ratios = options.ratios.empty() ? std::cerr : ratioFile;
+        CsvOutputs csv(options.out, options.ratios);
+        std::ostream& out = csv.out;
+        std::ostream& ratios = csv.ratios;
         out << "platform,device,precision,system,waters,atoms,integrator,steps_per_batch,batches,sync_ms,"
                "median_ms_per_step,min_ms_per_step,max_ms_per_step,ns_per_day,geometry_error_nm,finite\n";
         ratios << "system,atoms,measure,value,target,met\n";
@@ -367,7 +340,7 @@ int main(int argc, char** argv) {
             for (bool pme : {false, true}) {
                 const string systemName = pme ? "pme" : "bare";
                 const int atoms = 3 * box.waters;
-                if (options.budget > 0 && seconds(begin) > options.budget) {
+                if (options.budget > 0 && secondsSince(begin) > options.budget) {
                     std::cerr << "device_speed: skipped " << systemName << " at " << atoms << " atoms: the budget of "
                               << options.budget << " s is spent\n";
                     skipped = true;
@@ -389,7 +362,7 @@ int main(int argc, char** argv) {
                     catch (const OpenMMException&) {
                     }
                     std::cerr << "device_speed: " << systemName << ", " << atoms << " atoms, " << name
-                              << ": Context in " << std::setprecision(3) << seconds(start) << " s\n";
+                              << ": Context in " << std::setprecision(3) << secondsSince(start) << " s\n";
                     runs.push_back(std::move(run));
                 }
                 // Warm up, then size each batch to about batchSeconds (whole hundreds of steps
@@ -438,7 +411,7 @@ int main(int argc, char** argv) {
                 }
             }
         }
-        std::cerr << "device_speed: done in " << std::setprecision(4) << seconds(begin) << " s on " << device << "\n";
+        std::cerr << "device_speed: done in " << std::setprecision(4) << secondsSince(begin) << " s on " << device << "\n";
         return !allGood ? 2 : skipped ? 4 : 0;
     }
     catch (const std::exception& e) {

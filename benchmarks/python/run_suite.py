@@ -1,0 +1,183 @@
+#!/usr/bin/env python3
+"""Regenerate docs/results.md: accuracy, cost, sampling, long-run drift and user-gain benchmarks.
+
+    ./benchmarks/run.sh            # full suite (about 40 minutes on 2 cores; the long drift part about 11)
+    ./benchmarks/run.sh --quick    # smoke test: tiny runs, written to a scratch folder
+
+Every table and plot in docs/results.md comes from one run of this script; nothing is
+typed in by hand. This file runs the parts and writes their CSVs and plots; report.py turns
+their rows into the markdown.
+"""
+import argparse
+import csv
+import os
+import sys
+import time
+
+HERE = os.path.dirname(os.path.abspath(__file__))
+ROOT = os.path.dirname(os.path.dirname(HERE))
+
+
+def parse():
+    p = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    p.add_argument("--quick", action="store_true", help="tiny runs for CI smoke tests")
+    p.add_argument("--build", default=os.path.join(ROOT, "build"), help="CMake build folder")
+    p.add_argument("--out", default=None, help="output folder (default docs/, or a scratch folder with --quick)")
+    p.add_argument("--only", default=",".join(ALL_PARTS), help="comma-separated parts to run")
+    return p.parse_args()
+
+
+def main():
+    args = parse()
+    sys.path.insert(0, os.path.join(args.build, "python"))
+    sys.path.insert(0, HERE)
+    from suite import accuracy, cost, gains, langevin, long_drift, sampling
+    import report
+
+    out = args.out or (os.path.join(args.build, "results-quick") if args.quick else os.path.join(ROOT, "docs"))
+    results_dir = os.path.join(out, "results")
+    os.makedirs(results_dir, exist_ok=True)
+    parts = set(args.only.split(","))
+    started = time.time()
+
+    def log(message):
+        print("[%6.0f s] %s" % (time.time() - started, message), file=sys.stderr, flush=True)
+
+    q = args.quick
+    md = report.header(q)
+
+    if "cost" in parts:
+        # First, while the machine is quietest: timings.
+        log("cost: step_cost")
+        binary = os.path.join(args.build, "benchmarks", "cpp", "step_cost")
+        timings, ratios = cost.run_step_cost(
+            binary, ["Reference", "CPU"], [100, 1000, 3000] if not q else [50],
+            [3, 5, 12, 30] if not q else [3, 5], 7 if not q else 2, 0.1 if not q else 0.01, log,
+            threads=[1, 2])
+        write_csv(os.path.join(results_dir, "cost_step_times.csv"), timings)
+        write_csv(os.path.join(results_dir, "cost_ratios.csv"), ratios)
+        cost.plot(timings, os.path.join(results_dir, "cost_step_times.png"))
+        log("cost: micro-benchmarks of the numerical core")
+        micro = cost.micro_benchmarks(os.path.join(args.build, "benchmarks", "cpp", "RigidBodyMathBenchmarks"), log) \
+            if not q else []
+        write_csv(os.path.join(results_dir, "cost_micro_benchmarks.csv"), micro)
+        log("cost: profile of an M-RATTLE step (k = 5)")
+        prof = cost.profile(binary, 5, log) if not q else []
+        write_csv(os.path.join(results_dir, "cost_profile.csv"), prof)
+        log("cost: share of OpenMM's own work in a 1-thread CPU step (bounds the 2-thread speed-up)")
+        thread_prof = cost.thread_profile(binary, [3, 5, 12, 30], 3000, log) if not q else []
+        write_csv(os.path.join(results_dir, "cost_thread_profile.csv"), thread_prof)
+        log("cost: villin headpiece in water, CPU platform with 2 threads")
+        from suite import paper_cost, villin
+        vrows = villin.compare(2, 20, 7, log) if not q else []
+        write_csv(os.path.join(results_dir, "cost_villin.csv"), vrows)
+        log("cost: the paper's systems (one benzene, the 27-benzene cluster), forces included")
+        prows = paper_cost.compare(["Reference", "CPU"], 7 if not q else 1, 0.2 if not q else 0.01, log)
+        write_csv(os.path.join(results_dir, "cost_paper_systems.csv"), prows)
+        md += report.cost_section(timings, ratios, micro, prof, thread_prof, vrows, prows, q)
+
+    if "accuracy" in parts:
+        log("accuracy: isolated benzene")
+        steps = [0.5, 1, 2, 4, 8]
+        iso = accuracy.isolated_benzene(steps if not q else [1, 2], 2.048 if not q else 0.064, log)
+        write_csv(os.path.join(results_dir, "accuracy_isolated_benzene.csv"), iso)
+        accuracy.plot_isolated(iso, os.path.join(results_dir, "accuracy_isolated_benzene.png"))
+
+        log("accuracy: 27-benzene cluster")
+        csys, x, v, bodies = accuracy.cluster_start()
+        rows = accuracy.energy_vs_step("27-benzene cluster", csys, x, v, bodies, ["M-RATTLE", "splitting"],
+                                       steps if not q else [1, 2], 4.096 if not q else 0.1, log)
+        log("accuracy: non-planar 5-site cluster (OpenMM's RATTLE and CCMA too)")
+        tsys, tx, tv, tbodies = accuracy.tetrahedral_start()
+        # Reference platform: OpenMM 7.7's CPU platform turns this constrained system's
+        # coordinates to NaN on the first Verlet step, which Reference does not.
+        rows += accuracy.energy_vs_step("27 tetrahedral 5-site", tsys, tx, tv, tbodies,
+                                        ["M-RATTLE", "splitting", "RATTLE (CustomIntegrator)", "Verlet + CCMA"],
+                                        steps if not q else [1, 2], 4.0 if not q else 0.1, log, platform="Reference")
+        write_csv(os.path.join(results_dir, "accuracy_energy_vs_step.csv"), rows)
+        accuracy.plot(rows, os.path.join(results_dir, "accuracy_energy_vs_step.png"), "Energy fluctuation against step size")
+        order_rows = accuracy.orders(rows)
+        log("accuracy: planar benzene under OpenMM's distance constraints")
+        planar = accuracy.planar_benzene_with_constraints(0.5 if not q else 0.05, log)
+        write_csv(os.path.join(results_dir, "accuracy_planar_constraints.csv"), planar)
+        log("accuracy: which 9-constraint sets OpenMM's CCMA converges on")
+        ccma = accuracy.ccma_subsets(log)
+        write_csv(os.path.join(results_dir, "accuracy_ccma_subsets.csv"), ccma)
+        log("accuracy: time reversibility (forward, reverse the velocities, back)")
+        rev_steps = [10, 1000] if not q else [10, 50]
+        rev = accuracy.reversibility(rev_steps, 2.0, log)
+        write_csv(os.path.join(results_dir, "accuracy_reversibility.csv"), rev)
+        md += report.accuracy_section(iso, rows, order_rows, planar, ccma, q)
+        md += report.reversibility_section(rev, rev_steps)
+
+    if "sampling" in parts:
+        log("sampling: independent NVE runs of the cluster, both methods")
+        seeds = [11, 12, 13, 14, 15, 16] if not q else [11, 12]
+        per_run, eq, step = (24.0, 4.0, 4.0) if not q else (0.8, 0.2, 4.0)
+        res = {m: sampling.run_many(m, seeds, per_run, eq, step, 200.0, log) for m in ("M-RATTLE", "splitting")}
+        srows = sampling.compare(res)
+        write_csv(os.path.join(results_dir, "sampling_comparison.csv"), srows)
+        sampling.plot(res, os.path.join(results_dir, "sampling_histograms.png"))
+        md += report.sampling_section(srows, len(seeds), per_run, eq, step, q)
+        log("sampling: periodic liquid benzene (steady state), both methods")
+        from suite import sampling_liquid
+        n_liquid, lseeds = 64, ([1, 2, 3, 4] if not q else [1, 2])
+        leq, lrun, ldrop = (150.0, 20.0, 2.0) if not q else (0.2, 0.6, 0.2)
+        lres, ldrifts, ldof = sampling_liquid.run_many(n_liquid, lseeds, leq, lrun, ldrop, 4.0, log)
+        lrows = sampling_liquid.compare(lres, ldrifts, n_liquid)
+        write_csv(os.path.join(results_dir, "sampling_liquid_comparison.csv"), lrows)
+        md += report.liquid_sampling_section(lrows, n_liquid, len(lseeds), leq, lrun, ldrop, ldof)
+
+    if "drift" in parts:
+        log("drift: long NVE of the 27-benzene cluster from equilibrated starts, both methods")
+        # {step (fs): (ps per run, seeds)}: 200 ps at 4 fs from two starts, 100 ps at 2 fs from one
+        # (a 2 fs run costs twice as much; the whole part takes about 11 minutes on 2 cores).
+        dplan, deq, dsample, dradius, dtemp = ({4.0: (200.0, [1, 2]), 2.0: (100.0, [1])}, 100.0, 0.1, 2.0, 200.0) \
+            if not q else ({4.0: (0.4, [1])}, 0.4, 0.02, 2.0, 200.0)
+        drows = long_drift.run(dtemp, dplan, deq, dsample, dradius, log)
+        write_csv(os.path.join(results_dir, "long_drift.csv"),
+                  [{k: v for k, v in r.items() if not k.startswith("series_")} for r in drows])
+        long_drift.plot(drows, os.path.join(results_dir, "long_drift.png"))
+        md += report.long_drift_section(drows, dtemp, deq, dsample, dradius)
+
+    if "gains" in parts:
+        log("gains: liquid benzene with PME")
+        grows = gains.compare(64 if q else 128, [2, 4, 6, 8, 10] if not q else [4],
+                              10.0 if not q else 0.1, 10.0 if not q else 0.1, log)
+        write_csv(os.path.join(results_dir, "gains_liquid_benzene.csv"), grows)
+        md += report.gains_section(grows, q)
+
+    if "langevin" in parts:
+        log("langevin: validation against LangevinMiddle + SETTLE (water NVT, NPT; liquid benzene)")
+        md += langevin.run(q, os.path.join(results_dir, "langevin"), log)
+
+    if "equipartition" in parts:
+        log("equipartition: rigid TIP3P and SPC/E water, NVE at 0.5-4 fs (translational against rotational T)")
+        from suite import equipartition
+        md += equipartition.run(q, os.path.join(results_dir, "equipartition"), log)
+
+    path = os.path.join(out, "results.md")
+    report.write(path, md, parts >= set(ALL_PARTS), args.only, (time.time() - started) / 60)
+    log("wrote %s" % path)
+
+
+ALL_PARTS = ("accuracy", "cost", "sampling", "drift", "gains", "langevin", "equipartition")
+
+
+def write_csv(path, rows):
+    # Keep plain values; drop live objects (an NVE run's Context and Integrator).
+    plain = (str, int, float, bool, tuple, list, type(None))
+    rows = [{k: v for k, v in r.items() if isinstance(v, plain) or hasattr(v, "dtype")} for r in rows]
+    if not rows:
+        return
+    keys = []
+    for r in rows:  # every column any row has, in first-seen order
+        keys += [k for k in r if k not in keys]
+    with open(path, "w", newline="") as f:
+        w = csv.DictWriter(f, fieldnames=keys, restval="")
+        w.writeheader()
+        w.writerows(rows)
+
+
+if __name__ == "__main__":
+    main()
