@@ -255,6 +255,46 @@ TEST(MinimizerReference, LinearBodyFarRotationFreeConstraintsAndVirtualSites) {
     EXPECT_LE(rmsGeneralizedForce(context, integrator.getBodiesInEffect(), {}), 1.0);  // bodies: converged
 }
 
+TEST(MinimizerReference, BodyTurnsFarAboutOneAxis) {
+    // A triangle about the origin whose first atom is pulled round the z axis by a smooth
+    // field of its angle t, -k cos(t + s cos t) (s < 1: one minimum, at t + s cos t = 0, and
+    // one maximum, at t + s cos t = pi, 4.42 rad apart the long way round). From just past
+    // the maximum on that side the body turns 4.27 rad, beyond pi: the search restarts about
+    // a new frame on the way. A well on every atom holds the centroid, with no torque about it.
+    const double s = 0.8;
+    auto solve = [&](double target, double t) {  // Newton: t + s cos t = target
+        for (int k = 0; k < 50; k++)
+            t -= (t + s * std::cos(t) - target) / (1 - s * std::sin(t));
+        return t;
+    };
+    const double minimum = solve(0, 0), maximum = solve(M_PI, 3);
+    ASSERT_NEAR(4.4239, maximum - minimum, 1e-4);
+    System system;
+    vector<Vec3> positions;
+    const double radius = 0.1, startAngle = maximum - 0.15;
+    CustomExternalForce* field = new CustomExternalForce("-10*cos(t + 0.8*cos(t)); t = atan2(y, x)");
+    CustomExternalForce* well = new CustomExternalForce("1000*(x^2+y^2+z^2)");
+    for (int k = 0; k < 3; k++) {
+        const double a = startAngle + 2 * M_PI * k / 3;
+        positions.push_back(Vec3(radius * std::cos(a), radius * std::sin(a), 0));
+        well->addParticle(system.addParticle(12), {});
+    }
+    field->addParticle(0, {});
+    system.addForce(field);
+    system.addForce(well);
+    MRattleIntegrator integrator(0.001);
+    integrator.addRigidBody({0, 1, 2});
+    Context context(system, integrator, platform("Reference"));
+    context.setPositions(positions);
+    context.setVelocitiesToTemperature(300, 3);
+    RigidBodyMinimizationReport report = RigidBodyMinimizer::minimize(context, 1e-3);
+    const vector<Vec3> x = positionsOf(context);
+    EXPECT_LT(maxDistanceChange(positions, x, integrator.getBodiesInEffect()), 1e-12);
+    EXPECT_NEAR(minimum, std::atan2(x[0][1], x[0][0]), 1e-3) << report.iterations << " iterations";
+    EXPECT_NEAR(-10 + 1000 * 3 * radius * radius, report.finalEnergy, 1e-3);
+    EXPECT_LT(maxRigidityRate(context, integrator.getBodiesInEffect()), 1e-10);
+}
+
 TEST(MinimizerReference, CompoundIntegratorUsesItsRigidMember) {
     Cluster cluster = buildCluster(benzene(), 2, 0.62, 4);
     CompoundIntegrator compound;
@@ -280,6 +320,7 @@ TEST(MinimizerReference, NonFiniteEnergyIsNamedAndLeavesTheBestPoint) {
     MRattleIntegrator integrator(0.001);
     Context context(*cluster.system, integrator, platform("Reference"));
     context.setPositions(cluster.positions);
+    context.setVelocitiesToTemperature(300, 5);
     const double start = potentialEnergy(context);
     const std::string message = messageOf([&] { RigidBodyMinimizer::minimize(context, 1e-3); });
     EXPECT_NE(std::string::npos, message.find("potential energy is not finite")) << message;
@@ -288,6 +329,10 @@ TEST(MinimizerReference, NonFiniteEnergyIsNamedAndLeavesTheBestPoint) {
     EXPECT_TRUE(std::isfinite(left));
     EXPECT_LT(left, start);
     EXPECT_LT(maxDistanceChange(cluster.positions, positionsOf(context), cluster.molecules), 1e-12);
+    // The integrator saw the positions left: velocities rigid at them, and it steps.
+    EXPECT_LT(maxRigidityRate(context, cluster.molecules), 1e-10);
+    integrator.step(5);
+    EXPECT_LT(maxDistanceChange(cluster.positions, positionsOf(context), cluster.molecules), 1e-9);
 }
 
 TEST(MinimizerReference, BadArgumentsAndIterationLimit) {

@@ -140,6 +140,13 @@ protected:
     void loadCheckpoint(std::istream& stream) override;
 
 private:
+    friend class RigidBodyMinimizer;
+    /**
+     * Set by RigidBodyMinimizer during its search, whose setPositions() are exact rigid images
+     * of the bodies' shapes: they only invalidate the forces. Its last setPositions(), made
+     * with this cleared, checks the shapes and projects the velocities as any other.
+     */
+    bool minimizing = false;
     /** Throw unless bound to a Context. */
     void requireContext() const;
     /** The kernel's translational, rotational and free kinetic energies (index 0, 1, 2). */

@@ -10,7 +10,7 @@ namespace MRattlePlugin {
 struct OPENMM_EXPORT_MRATTLE RigidBodyMinimizationReport {
     /** L-BFGS iterations (accepted line searches), over all of its restarts. */
     int iterations = 0;
-    /** Energy and force evaluations (Context::getState calls with forces). */
+    /** Energy and force evaluations (of the Context, and the final energy when free constraints were projected). */
     int evaluations = 0;
     /** Potential energy at the start (after the free particles' constraints are applied) and at the end. */
     double initialEnergy = 0, finalEnergy = 0;
@@ -37,10 +37,11 @@ struct OPENMM_EXPORT_MRATTLE RigidBodyMinimizationReport {
  * the forces of the integrator's integration force groups; the search is L-BFGS (liblbfgs,
  * the code OpenMM's own minimizer embeds, with the same backtracking line search).
  *
- * It works through the public Context API (setPositions, computeVirtualSites, getState), as
- * LocalEnergyMinimizer does on the host, so it runs unchanged on every platform the
- * integrator runs on (Reference, CPU, OpenCL): its own work is O(N) per evaluation, next to
- * the force evaluation that dominates both minimizers.
+ * It evaluates on the host with the ContextImpl calls of LocalEnergyMinimizer's host version
+ * (setPositions, computeVirtualSites, calcForcesAndEnergy, getForces), so it runs unchanged
+ * on every platform the integrator runs on (Reference, CPU, OpenCL): its own work is O(N) per
+ * evaluation, next to the force evaluation that dominates both minimizers. During the search
+ * the integrator skips its own work at setPositions(); the search's last setPositions() does it.
  *
  * After it, the Context holds the best point found: the energy is never above the starting
  * one; the integrator's bodies keep their shapes, and the velocities are the integrator's

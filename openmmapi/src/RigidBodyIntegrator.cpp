@@ -182,7 +182,7 @@ bool RigidBodyIntegrator::isCurrentIntegrator() const {
 
 void RigidBodyIntegrator::stateChanged(State::DataType changed) {
     stepState.invalidateForces();
-    if (context == nullptr)
+    if (context == nullptr || (minimizing && changed == State::Positions))
         return;
     // OpenMM's last notification of a checkpoint load: continue as the run that wrote it.
     if (changed == State::Energy && stepState.finishCheckpointLoad(context->getStepCount()))

@@ -6,10 +6,12 @@
 #include "openmm/OpenMMException.h"
 #include "openmm/State.h"
 #include "openmm/VerletIntegrator.h"
+#include "openmm/internal/ContextImpl.h"
 #include <Eigen/Dense>
 #include <lbfgs.h>
 #include <algorithm>
 #include <cmath>
+#include <functional>
 #include <limits>
 #include <memory>
 #include <string>
@@ -82,14 +84,26 @@ struct BodyCoordinates {
 /** Codes the progress callback returns to stop liblbfgs (it passes them through). */
 enum Stop { Converged = 1, Rebase, IterationLimit, Aborted };
 
-/** Rotate a body's frame (theta) more than this and the search restarts about the new orientation. */
-constexpr double RebaseAngle = M_PI / 2;
+/**
+ * Rotate a body's frame (theta) more than this and the search restarts about the new
+ * orientation. Rotation vectors up to pi reach every orientation; there the exponential map
+ * is still well conditioned (J's smallest singular value 2/pi; it vanishes at 2 pi). Each
+ * restart discards the L-BFGS history and costs a few evaluations to rescale the first step
+ * (tip3p.pdb: two restarts at pi/2, 1.2 evaluations per iteration; none at pi, 1.03).
+ */
+constexpr double RebaseAngle = M_PI;
 
 class Search {
 public:
-    Search(Context& context, RigidBodyIntegrator& integrator, double tolerance, int maxIterations)
-        : context(context), system(context.getSystem()), topology(integrator.getTopology()),
-          tolerance(tolerance), maxIterations(maxIterations) {
+    /**
+     * impl: the Context's implementation, for LocalEnergyMinimizer's evaluation (no kinetic
+     * energy, no State); searching(true) has the integrator skip its work at each
+     * setPositions() (shapes, velocities) until searching(false).
+     */
+    Search(Context& context, ContextImpl& impl, const std::function<void(bool)>& searching,
+           RigidBodyIntegrator& integrator, double tolerance, int maxIterations)
+        : context(context), impl(impl), searching(searching), system(context.getSystem()),
+          topology(integrator.getTopology()), tolerance(tolerance), maxIterations(maxIterations) {
         groups = context.getIntegrator().getIntegrationForceGroups();
         // The device platforms (OpenMM's common compute platforms) sum forces in fixed point.
         const std::string platform = context.getPlatform().getName();
@@ -127,10 +141,13 @@ private:
     double maxFreeConstraintError(const vector<Vec3>& positions) const;
     void setContextPositions(const vector<Vec3>& positions);
     static bool hasLargeForce(const vector<Vec3>& forces);
-    State hostForces();
+    double hostForces();
+    void search();
     [[noreturn]] void fail(const std::string& what);
 
     Context& context;
+    ContextImpl& impl;
+    std::function<void(bool)> searching;
     /**
      * Platforms that sum forces in fixed point clip very large ones: then, as
      * LocalEnergyMinimizer does, the forces are recomputed on the CPU (or Reference) platform.
@@ -151,7 +168,7 @@ private:
     /** The liblbfgs vector (padded to a multiple of 8 with variables of zero gradient, for SSE builds). */
     std::unique_ptr<lbfgsfloatval_t, void (*)(lbfgsfloatval_t*)> x{nullptr, lbfgs_free};
     int paddedVariables = 0;
-    vector<Vec3> startPositions, trial;
+    vector<Vec3> startPositions, trial, forces;
     double startNorm = 1;
 
     /** The last evaluation, and the last accepted point (liblbfgs's iterate). */
@@ -267,7 +284,7 @@ bool Search::hasLargeForce(const vector<Vec3>& forces) {
     return false;
 }
 
-State Search::hostForces() {
+double Search::hostForces() {
     if (hostContext == nullptr) {
         Platform* host;
         try {
@@ -280,7 +297,9 @@ State Search::hostForces() {
     }
     hostContext->setPositions(trial);
     hostContext->computeVirtualSites();
-    return hostContext->getState(State::Forces | State::Energy, false, groups);
+    const State state = hostContext->getState(State::Forces | State::Energy, false, groups);
+    forces = state.getForces();
+    return state.getPotentialEnergy();
 }
 
 double Search::evaluate(const double* variables, double* g) {
@@ -318,15 +337,18 @@ double Search::evaluateUnchecked(const double* variables, double* g) {
         positionNorm2 += r.dot(r);
     if (!std::isfinite(positionNorm2))
         throw OpenMMException("the search reached positions that are not finite");
-    setContextPositions(trial);
-    State state = context.getState(State::Forces | State::Energy, false, groups);
+    // LocalEnergyMinimizer's calls (ReferenceMinimize.cpp): the integrator's own work at
+    // setPositions() is deferred (searching), and no kinetic energy or State is made.
+    impl.setPositions(trial);
+    impl.computeVirtualSites();
+    double potential = impl.calcForcesAndEnergy(true, true, groups);
+    impl.getForces(forces);
     evaluations++;
-    if (clipsLargeForces && hasLargeForce(state.getForces()))
-        state = hostForces();
-    double energy = state.getPotentialEnergy();
-    if (!std::isfinite(energy))
-        throw OpenMMException("the potential energy is not finite (" + std::to_string(energy) + ")");
-    const vector<Vec3>& forces = state.getForces();
+    if (clipsLargeForces && hasLargeForce(forces))
+        potential = hostForces();
+    if (!std::isfinite(potential))
+        throw OpenMMException("the potential energy is not finite (" + std::to_string(potential) + ")");
+    double energy = potential;
     auto checkedForce = [&](int i) {
         const Vec3& f = forces[i];
         if (!std::isfinite(f[0] + f[1] + f[2]))
@@ -389,7 +411,7 @@ double Search::evaluateUnchecked(const double* variables, double* g) {
     }
     for (size_t k = 0; k < 3 * freeParticles.size(); k++)
         norm2 += g[freeOffset + k] * g[freeOffset + k];
-    last.energy = state.getPotentialEnergy();
+    last.energy = potential;
     last.gradientNorm2 = norm2;
     last.positionNorm = std::sqrt(positionNorm2);
     return energy;
@@ -444,53 +466,15 @@ double Search::maxFreeConstraintError(const vector<Vec3>& positions) const {
 }
 
 void Search::fail(const std::string& what) {
-    // Leave the Context at liblbfgs's last iterate, the best point found.
-    positionsOf(x.get(), trial);
-    setContextPositions(trial);
+    // run() leaves the Context at liblbfgs's last iterate, the best point found.
     throw OpenMMException(Prefix + what + " during the search, after " + std::to_string(iterations) +
                           " iterations; the Context holds the best point found (energy " +
                           std::to_string(accepted.energy) + " kJ/mol)");
 }
 
-RigidBodyMinimizationReport Search::run() {
-    freeParticles = topology.getFreeParticles();
-    try {
-        // Refuses a Context whose positions were never set (getState(Positions) would not);
-        // with no force group selected it computes nothing.
-        context.getState(State::Energy, false, 0);
-    } catch (const OpenMMException& e) {
-        throw OpenMMException(Prefix + e.what());
-    }
-    // Start from constrained free particles, as LocalEnergyMinimizer does; the bodies keep
-    // the exact shapes the integrator gave them (applyConstraints would touch a body's own
-    // constraints, e.g. SETTLE's water, at its tolerance).
-    startPositions = context.getState(State::Positions).getPositions();
-    if (!topology.getFreeConstraints().empty()) {
-        context.applyConstraints(workingConstraintTolerance);
-        const vector<Vec3> constrained = context.getState(State::Positions).getPositions();
-        for (int i : freeParticles)
-            startPositions[i] = constrained[i];
-        setContextPositions(startPositions);
-        startPositions = context.getState(State::Positions).getPositions();
-    }
-    trial = startPositions;
-    double norm = 0;
-    for (const Vec3& r : startPositions)
-        norm += r.dot(r);
-    norm /= std::max(1, system.getNumParticles());
-    startNorm = norm < 1 ? 1 : std::sqrt(norm);
-    setUpBodies(startPositions);
-    restartAt(startPositions, true);
-
-    RigidBodyMinimizationReport report;
+/** The L-BFGS searches, with their restarts (new frames, stiffer springs), from the start set up by run(). */
+void Search::search() {
     vector<lbfgsfloatval_t> gradient(paddedVariables);
-    const double startEnergy = evaluate(x.get(), gradient.data());
-    if (!failure.empty())
-        throw OpenMMException(Prefix + failure + " at the starting positions");
-    report.initialEnergy = startEnergy;
-    accepted = last;
-    accepted.energy = startEnergy;  // with the springs' energy: zero, the free constraints hold
-
     lbfgs_parameter_t parameters;
     lbfgs_parameter_init(&parameters);
     parameters.linesearch = LBFGS_LINESEARCH_BACKTRACKING_STRONG_WOLFE;  // LocalEnergyMinimizer's
@@ -532,6 +516,59 @@ RigidBodyMinimizationReport Search::run() {
             fail(failure);
         accepted = last;
     }
+}
+
+RigidBodyMinimizationReport Search::run() {
+    freeParticles = topology.getFreeParticles();
+    try {
+        // Refuses a Context whose positions were never set (getState(Positions) would not);
+        // with no force group selected it computes nothing.
+        context.getState(State::Energy, false, 0);
+    } catch (const OpenMMException& e) {
+        throw OpenMMException(Prefix + e.what());
+    }
+    // Start from constrained free particles, as LocalEnergyMinimizer does; the bodies keep
+    // the exact shapes the integrator gave them (applyConstraints would touch a body's own
+    // constraints, e.g. SETTLE's water, at its tolerance).
+    startPositions = context.getState(State::Positions).getPositions();
+    if (!topology.getFreeConstraints().empty()) {
+        context.applyConstraints(workingConstraintTolerance);
+        const vector<Vec3> constrained = context.getState(State::Positions).getPositions();
+        for (int i : freeParticles)
+            startPositions[i] = constrained[i];
+        setContextPositions(startPositions);
+        startPositions = context.getState(State::Positions).getPositions();
+    }
+    trial = startPositions;
+    double norm = 0;
+    for (const Vec3& r : startPositions)
+        norm += r.dot(r);
+    norm /= std::max(1, system.getNumParticles());
+    startNorm = norm < 1 ? 1 : std::sqrt(norm);
+    setUpBodies(startPositions);
+    restartAt(startPositions, true);
+
+    RigidBodyMinimizationReport report;
+    vector<lbfgsfloatval_t> gradient(paddedVariables);
+    const double startEnergy = evaluate(x.get(), gradient.data());
+    if (!failure.empty())
+        throw OpenMMException(Prefix + failure + " at the starting positions");
+    report.initialEnergy = startEnergy;
+    accepted = last;
+    accepted.energy = startEnergy;  // with the springs' energy: zero, the free constraints hold
+
+    searching(true);
+    try {
+        search();
+    } catch (...) {
+        // Leave the Context at liblbfgs's last iterate, the best point found, through a
+        // setPositions() that the integrator sees (shapes, velocities).
+        searching(false);
+        positionsOf(x.get(), trial);
+        setContextPositions(trial);
+        throw;
+    }
+    searching(false);
 
     positionsOf(x.get(), trial);
     if (!topology.getFreeConstraints().empty()) {
@@ -576,6 +613,8 @@ RigidBodyMinimizationReport RigidBodyMinimizer::minimize(Context& context, doubl
     if (integrator == nullptr)
         throw OpenMMException(Prefix + "the Context's integrator is not one of the plugin's rigid-body integrators "
                               "(nor a CompoundIntegrator holding one); use OpenMM's LocalEnergyMinimizer");
-    Search search(context, *integrator, tolerance, maxIterations);
+    // A friend of the integrator: its ContextImpl, and its flag that defers the work of setPositions().
+    Search search(context, *integrator->context, [integrator](bool on) { integrator->minimizing = on; }, *integrator,
+                  tolerance, maxIterations);
     return search.run();
 }
