@@ -189,6 +189,24 @@ TEST(MinimizerReference, RigidWaterMinimumIsLocalEnergyMinimizersWithSettle) {
     EXPECT_GT(report.finalEnergy, openmmMinimum - 1e-2);
 }
 
+TEST(MinimizerReference, FirstStepIsTakenWithoutBacktracking) {
+    // liblbfgs's unit first step, 1 nm in all, was halved at least once on every benchmark
+    // system; the minimizer's scale makes it 0.003 nm rms, which the line search accepts.
+    Cluster cluster = waterCluster(3, 0.31, 11);
+    MRattleIntegrator integrator(0.001);
+    Context context(*cluster.system, integrator, platform("Reference"));
+    context.setPositions(cluster.positions);
+    RigidBodyMinimizationReport report = RigidBodyMinimizer::minimize(context, 1e-6, 1);
+    EXPECT_EQ(1, report.iterations);
+    EXPECT_EQ(2, report.evaluations);  // the start and one trial point
+    EXPECT_LT(report.finalEnergy, report.initialEnergy);
+    // The rest of the search keeps L-BFGS's own steps: about one evaluation per iteration.
+    context.setPositions(cluster.positions);
+    report = RigidBodyMinimizer::minimize(context, 1.0);
+    EXPECT_GT(report.iterations, 10);
+    EXPECT_LT(report.evaluations, 1.2 * report.iterations + 2) << report.iterations << " iterations";
+}
+
 TEST(MinimizerReference, LinearBodyFarRotationFreeConstraintsAndVirtualSites) {
     // A linear 3-site body, a water turned nearly upside down in a field that flips it, a
     // free diatomic with a constraint, and a virtual site on the water.

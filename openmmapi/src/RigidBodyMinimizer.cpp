@@ -79,6 +79,13 @@ struct BodyCoordinates {
     double sqrtAtoms = 1;
     int offset = 0;  // of its variables in x
     int numVariables() const { return 3 + (int) axes.cols(); }
+    /** Its rotation vector, from its variables (in units of the search's length scale). */
+    Vector3d rotationVector(const double* variables, double scale) const {
+        Vector3d theta = Vector3d::Zero();
+        for (int k = 0; k < axes.cols(); k++)
+            theta += axes.col(k) * (scale * variables[offset + 3 + k]);
+        return theta;
+    }
 };
 
 /** Codes the progress callback returns to stop liblbfgs (it passes them through). */
@@ -92,6 +99,15 @@ enum Stop { Converged = 1, Rebase, IterationLimit, Aborted };
  * (tip3p.pdb: two restarts at pi/2, 1.2 evaluations per iteration; none at pi, 1.03).
  */
 constexpr double RebaseAngle = M_PI;
+
+/**
+ * The first step of each L-BFGS search moves the particles this far, rms (nm). liblbfgs's
+ * first trial step is one unit of its variables; in nm (LocalEnergyMinimizer's scale) that
+ * moves them 1 nm in all, which every benchmark system backtracked at least once, an
+ * evaluation lost at each search's start. The variables are scaled so that the unit step is
+ * this one instead; L-BFGS's later steps do not depend on the scale (its H0 = s.y/y.y).
+ */
+constexpr double FirstStepRms = 0.003;
 
 class Search {
 public:
@@ -170,6 +186,8 @@ private:
     int paddedVariables = 0;
     vector<Vec3> startPositions, trial, forces;
     double startNorm = 1;
+    /** nm per unit of liblbfgs's variables (FirstStepRms). */
+    double lengthScale = 1;
 
     /** The last evaluation, and the last accepted point (liblbfgs's iterate). */
     struct Point {
@@ -251,16 +269,14 @@ void Search::restartAt(const vector<Vec3>& positions, bool resetOrientations) {
     std::fill(x.get(), x.get() + paddedVariables, 0.0);
     for (size_t k = 0; k < freeParticles.size(); k++)
         for (int d = 0; d < 3; d++)
-            x.get()[offset + 3 * k + d] = positions[freeParticles[k]][d];
+            x.get()[offset + 3 * k + d] = positions[freeParticles[k]][d] / lengthScale;
 }
 
 void Search::positionsOf(const double* variables, vector<Vec3>& positions) const {
     for (const BodyCoordinates& body : bodies) {
         const double* u = variables + body.offset;
-        const Vector3d center = body.center + Vector3d(u[0], u[1], u[2]) / body.sqrtAtoms;
-        Vector3d theta = Vector3d::Zero();
-        for (int k = 0; k < body.axes.cols(); k++)
-            theta += body.axes.col(k) * u[3 + k];
+        const Vector3d center = body.center + lengthScale * Vector3d(u[0], u[1], u[2]) / body.sqrtAtoms;
+        const Vector3d theta = body.rotationVector(variables, lengthScale);
         const Matrix3d rotation = RigidBodyMath::rotationFromVector(theta) * body.base;
         for (size_t k = 0; k < body.atoms.size(); k++) {
             const Vector3d r = center + rotation * body.shape[k];
@@ -269,7 +285,7 @@ void Search::positionsOf(const double* variables, vector<Vec3>& positions) const
     }
     const double* free = variables + (numVariables - 3 * freeParticles.size());
     for (size_t k = 0; k < freeParticles.size(); k++)
-        positions[freeParticles[k]] = Vec3(free[3 * k], free[3 * k + 1], free[3 * k + 2]);
+        positions[freeParticles[k]] = Vec3(free[3 * k], free[3 * k + 1], free[3 * k + 2]) * lengthScale;
 }
 
 void Search::setContextPositions(const vector<Vec3>& positions) {
@@ -359,10 +375,8 @@ double Search::evaluateUnchecked(const double* variables, double* g) {
     double norm2 = 0;
     for (const BodyCoordinates& body : bodies) {
         const double* u = variables + body.offset;
-        Vector3d theta = Vector3d::Zero();
-        for (int k = 0; k < body.axes.cols(); k++)
-            theta += body.axes.col(k) * u[3 + k];
-        const Vector3d center = body.center + Vector3d(u[0], u[1], u[2]) / body.sqrtAtoms;
+        const Vector3d theta = body.rotationVector(variables, lengthScale);
+        const Vector3d center = body.center + lengthScale * Vector3d(u[0], u[1], u[2]) / body.sqrtAtoms;
         Vector3d force = Vector3d::Zero(), torque = Vector3d::Zero();
         for (int i : body.atoms) {
             const Vector3d f = checkedForce(i);
@@ -373,9 +387,9 @@ double Search::evaluateUnchecked(const double* variables, double* g) {
         const Vector3d translation = -force / body.sqrtAtoms;
         const Eigen::VectorXd rotation = -body.axes.transpose() * (leftJacobian(theta).transpose() * torque);
         for (int d = 0; d < 3; d++)
-            g[body.offset + d] = translation[d];
+            g[body.offset + d] = lengthScale * translation[d];
         for (int k = 0; k < rotation.size(); k++)
-            g[body.offset + 3 + k] = rotation[k];
+            g[body.offset + 3 + k] = lengthScale * rotation[k];
         // The force projected on rigid motion at this orientation: |F|^2/n + tau . I^-1 tau.
         const Eigen::VectorXd projected = body.axes.transpose() *
                                           (RigidBodyMath::rotationFromVector(theta).transpose() * torque);
@@ -409,8 +423,10 @@ double Search::evaluateUnchecked(const double* variables, double* g) {
             }
         }
     }
-    for (size_t k = 0; k < 3 * freeParticles.size(); k++)
+    for (size_t k = 0; k < 3 * freeParticles.size(); k++) {
         norm2 += g[freeOffset + k] * g[freeOffset + k];
+        g[freeOffset + k] *= lengthScale;
+    }
     last.energy = potential;
     last.gradientNorm2 = norm2;
     last.positionNorm = std::sqrt(positionNorm2);
@@ -427,13 +443,9 @@ int Search::progress() {
         return Converged;
     if (maxIterations > 0 && iterations >= maxIterations)
         return IterationLimit;
-    for (const BodyCoordinates& body : bodies) {
-        Vector3d theta = Vector3d::Zero();
-        for (int k = 0; k < body.axes.cols(); k++)
-            theta += body.axes.col(k) * x.get()[body.offset + 3 + k];
-        if (theta.norm() > RebaseAngle)
+    for (const BodyCoordinates& body : bodies)
+        if (body.rotationVector(x.get(), lengthScale).norm() > RebaseAngle)
             return Rebase;
-    }
     return 0;
 }
 
@@ -441,12 +453,8 @@ void Search::rebase() {
     // Fold each body's rotation into its frame (composed with the rotations before: the
     // shape itself is never rotated in place) and restart about the new orientations.
     positionsOf(x.get(), trial);
-    for (BodyCoordinates& body : bodies) {
-        Vector3d theta = Vector3d::Zero();
-        for (int k = 0; k < body.axes.cols(); k++)
-            theta += body.axes.col(k) * x.get()[body.offset + 3 + k];
-        body.base = RigidBodyMath::rotationFromVector(theta) * body.base;
-    }
+    for (BodyCoordinates& body : bodies)
+        body.base = RigidBodyMath::rotationFromVector(body.rotationVector(x.get(), lengthScale)) * body.base;
     restartAt(trial, false);
 }
 
@@ -545,6 +553,7 @@ RigidBodyMinimizationReport Search::run() {
         norm += r.dot(r);
     norm /= std::max(1, system.getNumParticles());
     startNorm = norm < 1 ? 1 : std::sqrt(norm);
+    lengthScale = FirstStepRms * std::sqrt((double) std::max(1, system.getNumParticles()));
     setUpBodies(startPositions);
     restartAt(startPositions, true);
 
