@@ -252,3 +252,22 @@ def test_every_method_counts_degrees_of_freedom_with_the_package():
         run = common.nve_run(system, positions, velocities, method, 0.001, 0.002, 0.001, "Reference", bodies)
         assert run["failure"] is None
         assert run["dof"] == 6*8 == mrattle.degreesOfFreedom(run["context"])
+
+
+def test_minimization_starts_runs_both_minimizers_from_each_start(tmp_path):
+    # Two starts at a loose tolerance: every number of the docs' table comes out and makes sense.
+    out, plot = tmp_path / "starts.csv", tmp_path / "starts.png"
+    subprocess.run([sys.executable, os.path.join(SUITE, "minimization_starts.py"), "--build", BUILD, "--starts", "2",
+                    "--tolerances", "40", "--out", str(out), "--plot", str(plot)], check=True, timeout=600)
+    rows = read(out)
+    assert [int(r["start"]) for r in rows] == [0, 1]
+    start_energy = -36024.6  # tip3p.pdb with exact waters (docs/minimization.md); moved waters start higher
+    for r in rows:
+        assert float(r["rigid_rms_force"]) <= 40
+        assert float(r["rigid_energy"]) < start_energy - 1000
+        assert float(r["openmm_energy"]) < start_energy - 1000
+        assert abs(float(r["gap"]) - (float(r["rigid_energy"]) - float(r["openmm_energy"]))) < 1e-6
+        assert float(r["matched_rigid_energy"]) < start_energy - 1000
+        assert abs(float(r["matched_gap"]) - (float(r["matched_rigid_energy"]) - float(r["openmm_energy"]))) < 1e-6
+        assert (r["openmm_end_passes_rigid_test"] == "True") == (float(r["openmm_rms_force"]) <= 40)
+    assert plot.stat().st_size > 1000
