@@ -79,7 +79,11 @@ struct BodyCoordinates {
     double sqrtAtoms = 1;
     int offset = 0;  // of its variables in x
     int numVariables() const { return 3 + (int) axes.cols(); }
-    /** Its rotation vector, from its variables (in units of the search's length scale). */
+    /** Its centroid and its rotation vector, from its variables (in units of the search's length scale). */
+    Vector3d centroid(const double* variables, double scale) const {
+        const double* u = variables + offset;
+        return center + scale * Vector3d(u[0], u[1], u[2]) / sqrtAtoms;
+    }
     Vector3d rotationVector(const double* variables, double scale) const {
         Vector3d theta = Vector3d::Zero();
         for (int k = 0; k < axes.cols(); k++)
@@ -274,8 +278,7 @@ void Search::restartAt(const vector<Vec3>& positions, bool resetOrientations) {
 
 void Search::positionsOf(const double* variables, vector<Vec3>& positions) const {
     for (const BodyCoordinates& body : bodies) {
-        const double* u = variables + body.offset;
-        const Vector3d center = body.center + lengthScale * Vector3d(u[0], u[1], u[2]) / body.sqrtAtoms;
+        const Vector3d center = body.centroid(variables, lengthScale);
         const Vector3d theta = body.rotationVector(variables, lengthScale);
         const Matrix3d rotation = RigidBodyMath::rotationFromVector(theta) * body.base;
         for (size_t k = 0; k < body.atoms.size(); k++) {
@@ -374,9 +377,8 @@ double Search::evaluateUnchecked(const double* variables, double* g) {
     std::fill(g, g + paddedVariables, 0.0);
     double norm2 = 0;
     for (const BodyCoordinates& body : bodies) {
-        const double* u = variables + body.offset;
         const Vector3d theta = body.rotationVector(variables, lengthScale);
-        const Vector3d center = body.center + lengthScale * Vector3d(u[0], u[1], u[2]) / body.sqrtAtoms;
+        const Vector3d center = body.centroid(variables, lengthScale);
         Vector3d force = Vector3d::Zero(), torque = Vector3d::Zero();
         for (int i : body.atoms) {
             const Vector3d f = checkedForce(i);
