@@ -1,5 +1,5 @@
 #include "MRattleIntegrator.h"
-#include "MRattleLangevinIntegrator.h"
+#include "MRattleLangevinIntegratorProxy.h"
 #include "RigidBodyIntegratorProxy.h"
 #include "RigidSplittingIntegrator.h"
 #include "openmm/serialization/SerializationProxy.h"
