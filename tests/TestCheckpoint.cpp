@@ -399,7 +399,7 @@ TEST_P(Checkpoint, RefusesUnknownFormatVersionAndDamage) {
     size_t offset = integratorDataOffset(checkpoint);
     int32_t version = 99;
     checkpoint.replace(offset + 8, sizeof(version), reinterpret_cast<const char*>(&version), sizeof(version));
-    expectRefusedUntilStateIsSet(run, checkpoint, {"format version 99", "reads version 3"});
+    expectRefusedUntilStateIsSet(run, checkpoint, {"format version 99", "reads versions 3 to 4"});
 
     string badMagic = checkpointOf(*run.context);
     badMagic[integratorDataOffset(badMagic) + 2] = 'X';

@@ -16,8 +16,11 @@ namespace {
 // signature, then the kernel's own state. Numbers are native-endian, like the rest of an
 // OpenMM checkpoint. Version 2: the kernel's state follows the header. Version 3: the
 // kernel's state is framed by its length, and an FNV-1a checksum of everything closes it.
+// Version 4: the same layout; the frame here is the kernel state's only one (in version 3
+// the Reference kernel framed its state again, which it still reads).
 const char CheckpointMagic[8] = {'M', 'R', 'a', 't', 't', 'l', 'e', 'C'};
-const int32_t CheckpointVersion = 3;
+const int32_t CheckpointVersion = 4;
+const int32_t OldestReadableVersion = 3;
 const int32_t MaxKernelNameLength = 1024;
 const int64_t MaxKernelStateLength = 1 << 24;
 
@@ -104,10 +107,10 @@ std::string RigidBodyCheckpointHeader::read(std::istream& input, const std::stri
         throw OpenMMException("the checkpoint's integrator data is not a rigid-body integrator's: it is malformed, "
                               "or it was written by a Context with a different integrator");
     int32_t version = readValue<int32_t>(stream, "format version");
-    if (version != CheckpointVersion)
+    if (version < OldestReadableVersion || version > CheckpointVersion)
         throw OpenMMException("the checkpoint's rigid-body integrator data has format version " +
-                              std::to_string(version) + ", and this build of the plugin reads version " +
-                              std::to_string(CheckpointVersion) + " only");
+                              std::to_string(version) + ", and this build of the plugin reads versions " +
+                              std::to_string(OldestReadableVersion) + " to " + std::to_string(CheckpointVersion));
     int32_t nameLength = readValue<int32_t>(stream, "integrator name");
     if (nameLength < 0 || nameLength > MaxKernelNameLength)
         throw OpenMMException("the checkpoint's rigid-body integrator data is malformed (integrator name of length " +

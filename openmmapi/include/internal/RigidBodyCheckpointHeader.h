@@ -10,8 +10,8 @@ namespace MRattlePlugin {
 /**
  * A rigid-body integrator's part of a checkpoint (OpenMM writes it after the Context's own
  * data): magic, format version, the step kernel's name, the number of bodies in effect
- * and their signature, the kernel's own state (length and bytes), and a checksum of all of
- * it, so that damage anywhere in it is refused rather than loaded.
+ * and their signature, the kernel's own state (length and bytes: the only frame it has),
+ * and a checksum of all of it, so that damage anywhere in it is refused rather than loaded.
  */
 namespace RigidBodyCheckpointHeader {
 

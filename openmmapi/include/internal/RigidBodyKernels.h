@@ -92,9 +92,15 @@ public:
     virtual bool isBodyLinear(int index) const = 0;
     /** The bodies' degrees of freedom at the last positions set: 6 each, 5 if linear, 3 if its atoms coincide. */
     virtual int getBodyDegreesOfFreedom() const = 0;
-    /** Write the kernel's own state (e.g. its random stream) into a checkpoint. */
+    /**
+     * Write the kernel's own state (e.g. its random stream) into a checkpoint, unframed: the
+     * checkpoint header (RigidBodyCheckpointHeader) frames it.
+     */
     virtual void createCheckpoint(OpenMM::ContextImpl& context, std::ostream& stream) const = 0;
-    /** Read what createCheckpoint() wrote; throw an OpenMMException saying what is wrong if it does not fit. */
+    /**
+     * Read what createCheckpoint() wrote (the stream holds exactly that); throw an
+     * OpenMMException saying what is wrong if it does not fit.
+     */
     virtual void loadCheckpoint(OpenMM::ContextImpl& context, std::istream& stream) = 0;
     /**
      * A checkpoint was refused after OpenMM had read its own part of it unchecked: make the

@@ -123,7 +123,11 @@ public:
         return collisionRandom;
     }
     void seedRandom(int seed);
-    /** The random stream, for checkpoints. */
+    /**
+     * The random stream, for checkpoints: written unframed (the checkpoint header frames the
+     * kernel's state), so an integrator's kernel may write state of its own after it and read
+     * it back after readState(). readState() also reads the state of a format-3 checkpoint.
+     */
     void writeState(std::ostream& stream) const;
     void readState(std::istream& stream);
 

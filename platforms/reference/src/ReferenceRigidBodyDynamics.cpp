@@ -1,5 +1,5 @@
 #include "ReferenceRigidBodyDynamics.h"
-#include "HostRigidBodyRules.h"
+#include "FiniteValues.h"
 #include "RigidBodyIntegrator.h"
 #include "openmm/AndersenThermostat.h"
 #include "openmm/OpenMMException.h"
@@ -160,7 +160,7 @@ void ReferenceRigidBodyDynamics::requireFiniteStepResult() {
 
 void ReferenceRigidBodyDynamics::updateShapes(ContextImpl& context) {
     vector<Vec3>& x = positionsOf(context);
-    HostRigidBodyRules::requireFinite(x, "position");
+    FiniteValues::require(x, "position");
     if (shapes->apply(x))
         context.computeVirtualSites();
     ops->updateShapes(x);
@@ -168,11 +168,11 @@ void ReferenceRigidBodyDynamics::updateShapes(ContextImpl& context) {
 
 void ReferenceRigidBodyDynamics::projectVelocities(ContextImpl& context, double tolerance) {
     vector<Vec3>& v = velocitiesOf(context);
-    HostRigidBodyRules::requireFinite(v, "velocity");
+    FiniteValues::require(v, "velocity");
     const vector<Vec3> given = v;  // only when velocities are set, not in the step
     try {
         ops->projectNonRigidVelocities(positionsOf(context), v, tolerance);
-        HostRigidBodyRules::requireFinite(v, "velocity projected at the current positions (a degenerate constraint?)");
+        FiniteValues::require(v, "velocity projected at the current positions (a degenerate constraint?)");
     } catch (...) {
         v = given;  // a refused projection (not finite, or constraints not converged) changes nothing
         throw;

@@ -1,10 +1,13 @@
 #include "ReferenceRigidBodyOperations.h"
-#include "HostRigidBodyRules.h"
+#include "BodyShapes.h"
+#include "ThermalVelocities.h"
 #include "openmm/AndersenThermostat.h"
 #include "openmm/OpenMMException.h"
 #include "openmm/reference/SimTKOpenMMRealType.h"
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
+#include <istream>
 #include <sstream>
 #include <string>
 
@@ -19,6 +22,24 @@ namespace {
  * stops within 1x when it converges; the slack is for round-off, SETTLE's included).
  */
 const double ConstraintCheckSlack = 2;
+
+/**
+ * A checkpoint of format 3 framed this kernel's state again, with its length (int32,
+ * native-endian) before the text: skip that frame if the stream starts with one. The text
+ * of a random state starts with a digit, so its first four bytes read as a length are at
+ * least 0x30303030: never the length of the rest, which is how a frame is told apart.
+ */
+void skipFormat3Frame(std::istream& stream) {
+    const std::streampos start = stream.tellg();
+    stream.seekg(0, std::ios::end);
+    const std::streamoff rest = stream.tellg() - start;
+    stream.seekg(start);
+    int32_t length = -1;
+    if (rest >= (std::streamoff) sizeof(length))
+        stream.read(reinterpret_cast<char*>(&length), sizeof(length));
+    if (!(length >= 0 && length == rest - (std::streamoff) sizeof(length)))
+        stream.seekg(start);
+}
 
 } // namespace
 
@@ -143,14 +164,14 @@ void ReferenceRigidBodyOperations::forEachParticleRange(const std::function<void
 }
 
 void ReferenceRigidBodyOperations::updateShapes(const vector<Vec3>& positions) {
-    shapes = HostRigidBodyRules::classifyShapes(bodies, positions);
+    shapes = BodyShapes::classify(bodies, positions);
     // A point rotates no more than a line does: both take the linear body's arithmetic.
     for (int b = 0; b < bodies.getNumBodies(); b++)
         views[b].linear = (shapes[b] != RigidBodyMath::Shape::General);
 }
 
 int ReferenceRigidBodyOperations::getBodyDegreesOfFreedom() const {
-    return HostRigidBodyRules::bodyDegreesOfFreedom(shapes);
+    return BodyShapes::degreesOfFreedom(shapes);
 }
 
 void ReferenceRigidBodyOperations::seedRandom(int seed) {
@@ -309,9 +330,9 @@ vector<Vec3> ReferenceRigidBodyOperations::velocitiesForTemperature(vector<Vec3>
     // Maxwell-Boltzmann per particle, then the rigid-body projection (which keeps the
     // distribution's form on the rigid degrees of freedom), then an exact rescale to the
     // requested kinetic temperature with the rigid-body degrees of freedom.
-    vector<Vec3> velocities = HostRigidBodyRules::maxwellBoltzmannVelocities(inverseMass, temperature, randomSeed);
+    vector<Vec3> velocities = ThermalVelocities::maxwellBoltzmann(inverseMass, temperature, randomSeed);
     projectVelocities(positions, velocities, tolerance);
-    HostRigidBodyRules::scaleToTemperature(bodies, inverseMass, bodies.getNumDegreesOfFreedom(getBodyDegreesOfFreedom()),
+    ThermalVelocities::scaleToTemperature(bodies, inverseMass, bodies.getNumDegreesOfFreedom(getBodyDegreesOfFreedom()),
                                            temperature, velocities);
     return velocities;
 }
@@ -337,16 +358,15 @@ void ReferenceRigidBodyOperations::collideBodies(vector<Vec3>& x, vector<Vec3>& 
 }
 
 void ReferenceRigidBodyOperations::writeState(std::ostream& stream) const {
-    std::ostringstream text;
-    text << collisionRandom;
-    HostRigidBodyRules::writeKernelState(stream, text.str());
+    // Unframed: the checkpoint header frames the kernel's state.
+    stream << collisionRandom;
 }
 
 void ReferenceRigidBodyOperations::readState(std::istream& stream) {
-    std::istringstream text(HostRigidBodyRules::readKernelState(stream));
+    skipFormat3Frame(stream);
     std::mt19937_64 generator;
-    text >> generator;
-    if (text.fail())
+    stream >> generator;
+    if (stream.fail())
         throw OpenMMException("the checkpoint's kernel data is malformed (its random state cannot be read)");
     collisionRandom = generator;
     randomIsSet = true;
