@@ -1,5 +1,6 @@
 #include "mrattle/RigidBodyMath.h"
 #include "mrattle/Coordinates.h"
+#include "mrattle/RigidBodyCoordinates.h"
 #include "TorqueCondition.h"
 #include <algorithm>
 #include <cmath>
@@ -17,14 +18,6 @@ namespace {
 Vector3d vexOfSkewPart(const Matrix3d& A) {
     // vex(A - A^T)
     return Vector3d(A(2, 1) - A(1, 2), A(0, 2) - A(2, 0), A(1, 0) - A(0, 1));
-}
-
-Matrix3d crossMatrix(const Vector3d& w) {
-    Matrix3d m;
-    m << 0, -w.z(), w.y(),
-         w.z(), 0, -w.x(),
-         -w.y(), w.x(), 0;
-    return m;
 }
 
 /** Unit vector along a linear body: the direction of its atom farthest from the centre. */
