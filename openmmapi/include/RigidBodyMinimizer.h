@@ -3,6 +3,9 @@
 
 #include "openmm/Context.h"
 #include "internal/windowsExportMRattle.h"
+#include <map>
+#include <string>
+#include <vector>
 
 namespace MRattlePlugin {
 
@@ -21,6 +24,56 @@ struct OPENMM_EXPORT_MRATTLE RigidBodyMinimizationReport {
      * free particle's |f|^2 with the constraint springs.
      */
     double rmsForce = 0;
+};
+
+/**
+ * Called by RigidBodyMinimizer::minimize() after each iteration, with the arguments of OpenMM
+ * 8's MinimizationReporter::report() (this class exists on every OpenMM version the plugin
+ * builds with; ForwardingMinimizationReporter passes the calls on to an OpenMM reporter):
+ *  - iteration: the index of the iteration within the present strength of the free
+ *    particles' constraint springs (from 0; back to 0 when the springs are stiffened);
+ *  - x: the Cartesian positions of the iterate, flattened (x0, y0, z0, x1, ...), virtual
+ *    sites included; every body has its exact starting shape;
+ *  - grad: the gradient of the objective (potential energy plus spring energy) that the
+ *    search sees, as Cartesian components: for a body's atoms minus the force projected on
+ *    the body's rigid motion (unit masses: net force / n + w x r, w = I^-1 torque), for a
+ *    free particle minus its force with its springs, zero for others; |grad|^2 is the
+ *    search's squared generalized force;
+ *  - args: "system energy" (potential energy, kJ/mol), "restraint energy" (the free
+ *    particles' constraint springs, kJ/mol), "restraint strength" (their force constant,
+ *    kJ/mol/nm^2), "max constraint error" (the largest relative error |r - d| / d of any
+ *    constraint of the System at x).
+ * Returning true ends the L-BFGS search at this iterate: minimize() then returns, unless a
+ * free particle's constraint is still off by more than the working tolerance, in which case
+ * the springs are stiffened and the search goes on (as LocalEnergyMinimizer does).
+ */
+class OPENMM_EXPORT_MRATTLE RigidBodyMinimizationReporter {
+public:
+    virtual ~RigidBodyMinimizationReporter() {
+    }
+    virtual bool report(int iteration, const std::vector<double>& x, const std::vector<double>& grad,
+                        std::map<std::string, double>& args) = 0;
+};
+
+/**
+ * A RigidBodyMinimizationReporter that passes each call on to `reporter`, any object with
+ * OpenMM 8's report(iteration, x, grad, args), e.g. an OpenMM::MinimizationReporter:
+ *
+ *     ForwardingMinimizationReporter<OpenMM::MinimizationReporter> forward(myReporter);
+ *     RigidBodyMinimizer::minimize(context, 10, 0, &forward);
+ */
+template <class Reporter>
+class ForwardingMinimizationReporter : public RigidBodyMinimizationReporter {
+public:
+    explicit ForwardingMinimizationReporter(Reporter& reporter) : reporter(reporter) {
+    }
+    bool report(int iteration, const std::vector<double>& x, const std::vector<double>& grad,
+                std::map<std::string, double>& args) override {
+        return reporter.report(iteration, x, grad, args);
+    }
+
+private:
+    Reporter& reporter;
 };
 
 /**
@@ -63,13 +116,17 @@ public:
      *                       tests rms = tolerance exactly. Must be finite and >= 0 (default 10).
      * @param maxIterations  the most L-BFGS iterations, as LocalEnergyMinimizer's (0: until
      *                       converged); here counted over all restarts. Must be >= 0.
+     * @param reporter       called after each iteration (may be null); returning true stops
+     *                       the search (RigidBodyMinimizationReporter). An exception it throws
+     *                       ends the search as an error does.
      * @return what it did
      * @throws OpenMMException for a bad argument, a Context without a rigid-body integrator or
      *         without positions, or an energy, force or position that is not finite during the
      *         search (naming it; the Context is then left at the best point found)
      */
     static RigidBodyMinimizationReport minimize(OpenMM::Context& context, double tolerance = 10,
-                                                int maxIterations = 0);
+                                                int maxIterations = 0,
+                                                RigidBodyMinimizationReporter* reporter = nullptr);
     /** True if minimize() applies: the Context's integrator is, or holds, a rigid-body integrator. */
     static bool appliesTo(OpenMM::Context& context);
 };

@@ -35,7 +35,8 @@ bool RigidBodyMinimizer::appliesTo(Context& context) {
     return findRigidBodyIntegrator(context.getIntegrator()) != nullptr;
 }
 
-RigidBodyMinimizationReport RigidBodyMinimizer::minimize(Context& context, double tolerance, int maxIterations) {
+RigidBodyMinimizationReport RigidBodyMinimizer::minimize(Context& context, double tolerance, int maxIterations,
+                                                         RigidBodyMinimizationReporter* reporter) {
     if (!(tolerance >= 0) || !std::isfinite(tolerance))
         throw OpenMMException(MinimizerPrefix + "the tolerance must be a finite number >= 0 (kJ/mol/nm), got " +
                               std::to_string(tolerance));
@@ -48,6 +49,7 @@ RigidBodyMinimizationReport RigidBodyMinimizer::minimize(Context& context, doubl
                               "integrators (nor a CompoundIntegrator holding one); use OpenMM's LocalEnergyMinimizer");
     // A friend of the integrator: its ContextImpl, and its flag that defers the work of setPositions().
     RigidBodySearch search(context, *integrator->context, [integrator](bool on) { integrator->minimizing = on; },
-                           integrator->getTopology(), integrator->getConstraintTolerance(), tolerance, maxIterations);
+                           integrator->getTopology(), integrator->getConstraintTolerance(), tolerance, maxIterations,
+                           reporter);
     return search.run();
 }

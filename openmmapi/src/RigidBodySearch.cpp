@@ -29,7 +29,7 @@ bool hasLargeForce(const vector<Vec3>& forces) {
 }
 
 /** Codes the progress callback returns to stop liblbfgs (it passes them through). */
-enum Stop { Converged = 1, Rebase, IterationLimit, Aborted };
+enum Stop { Converged = 1, Rebase, IterationLimit, Aborted, StoppedByReporter };
 
 /**
  * Rotate a body's frame (theta) more than this and the search restarts about the new
@@ -53,9 +53,9 @@ constexpr double FirstStepRms = 0.003;
 
 RigidBodySearch::RigidBodySearch(Context& context, ContextImpl& impl, const std::function<void(bool)>& searching,
                                  const RigidBodyTopology& topology, double constraintTolerance, double tolerance,
-                                 int maxIterations)
+                                 int maxIterations, RigidBodyMinimizationReporter* reporter)
     : context(context), impl(impl), searching(searching), system(context.getSystem()), topology(topology),
-      tolerance(tolerance), maxIterations(maxIterations) {
+      tolerance(tolerance), maxIterations(maxIterations), reporter(reporter) {
     groups = context.getIntegrator().getIntegrationForceGroups();
     // The device platforms (OpenMM's common compute platforms) sum forces in fixed point.
     const std::string platform = context.getPlatform().getName();
@@ -167,7 +167,7 @@ double RigidBodySearch::evaluateUnchecked(const double* variables, double* g) {
         potential = hostForces();
     if (!std::isfinite(potential))
         throw OpenMMException("the potential energy is not finite (" + std::to_string(potential) + ")");
-    double energy = potential;
+    double energy = potential, springEnergy = 0;
     auto checkFinite = [&](int i) {
         const Vec3& f = forces[i];
         if (!std::isfinite(f[0] + f[1] + f[2]))
@@ -198,7 +198,9 @@ double RigidBodySearch::evaluateUnchecked(const double* variables, double* g) {
             Vec3 delta = trial[p2] - trial[p1];
             const double r = std::sqrt(delta.dot(delta));
             const double dr = r - distance;
-            energy += 0.5 * springConstant * dr * dr;
+            const double spring = 0.5 * springConstant * dr * dr;
+            energy += spring;
+            springEnergy += spring;
             delta *= springConstant * dr / r;
             for (int d = 0; d < 3; d++) {
                 if (slot[p1] >= 0)
@@ -213,17 +215,28 @@ double RigidBodySearch::evaluateUnchecked(const double* variables, double* g) {
         g[freeOffset + k] *= lengthScale;
     }
     last.energy = potential;
+    last.springEnergy = springEnergy;
     last.gradientNorm2 = norm2;
     last.positionNorm = std::sqrt(positionNorm2);
     return energy;
 }
 
-int RigidBodySearch::progress() {
+int RigidBodySearch::progress(const double* g) {
     // liblbfgs calls this after each accepted line search, whose last evaluation is the new iterate.
     iterations++;
     accepted = last;
     if (!failure.empty())
         return Aborted;
+    if (reporter != nullptr) {
+        // liblbfgs is C: what the reporter throws ends the search as a failed evaluation does.
+        try {
+            if (reportIteration(g))
+                return StoppedByReporter;
+        } catch (const std::exception& e) {
+            failure = std::string("the reporter threw: ") + e.what();
+            return Aborted;
+        }
+    }
     if (converged(accepted))
         return Converged;
     if (maxIterations > 0 && iterations >= maxIterations)
@@ -301,6 +314,7 @@ void RigidBodySearch::search() {
             break;  // the constraints hold, or stiffer springs do not help (applyConstraints below)
         previousMaxError = maxError;
         springConstant *= 10;
+        roundIterations = 0;
         cached.valid = false;
         if (maxError > 100 * workingConstraintTolerance)
             restartAt(startPositions, true);  // far from valid: start again, as LocalEnergyMinimizer does

@@ -38,7 +38,8 @@ public:
      * setPositions() (shapes, velocities) until searching(false).
      */
     RigidBodySearch(OpenMM::Context& context, OpenMM::ContextImpl& impl, const std::function<void(bool)>& searching,
-                    const RigidBodyTopology& topology, double constraintTolerance, double tolerance, int maxIterations);
+                    const RigidBodyTopology& topology, double constraintTolerance, double tolerance, int maxIterations,
+                    RigidBodyMinimizationReporter* reporter);
 
     /** Minimize; the Context ends at the best point found (also when it throws). */
     RigidBodyMinimizationReport run();
@@ -48,9 +49,9 @@ private:
                                             lbfgsfloatval_t) {
         return static_cast<RigidBodySearch*>(instance)->evaluate(x, g);
     }
-    static int progressCallback(void* instance, const lbfgsfloatval_t*, const lbfgsfloatval_t*, lbfgsfloatval_t,
+    static int progressCallback(void* instance, const lbfgsfloatval_t*, const lbfgsfloatval_t* g, lbfgsfloatval_t,
                                 lbfgsfloatval_t, lbfgsfloatval_t, lbfgsfloatval_t, int, int, int) {
-        return static_cast<RigidBodySearch*>(instance)->progress();
+        return static_cast<RigidBodySearch*>(instance)->progress(g);
     }
 
     void restartAt(const std::vector<OpenMM::Vec3>& positions, bool resetOrientations);
@@ -58,7 +59,10 @@ private:
     double evaluate(const double* x, double* g);
     double evaluateUnchecked(const double* x, double* g);
     double addSprings(double* g);
-    int progress();
+    /** After each iteration (g: liblbfgs's gradient there): report it, test it; nonzero stops liblbfgs (Stop). */
+    int progress(const double* g);
+    /** Call the reporter with the iterate in OpenMM's terms (RigidBodySearchReport.cpp); true: stop. */
+    bool reportIteration(const double* g);
     struct Point;
     /** LocalEnergyMinimizer's test: |g| <= tolerance * max(1, |x|) / max(1, rms|x0|). */
     bool converged(const Point& point) const;
@@ -83,6 +87,7 @@ private:
     const RigidBodyTopology& topology;
     double tolerance;
     int maxIterations;
+    RigidBodyMinimizationReporter* reporter;
     int groups;
     double workingConstraintTolerance, springConstant;
 
@@ -101,7 +106,7 @@ private:
 
     /** The last evaluation, and the last accepted point (liblbfgs's iterate). */
     struct Point {
-        double energy = 0, gradientNorm2 = 0, positionNorm = 0;
+        double energy = 0, springEnergy = 0, gradientNorm2 = 0, positionNorm = 0;
     } last, accepted;
     /** The last evaluation, for liblbfgs's repeat of it; invalid once the variables or springs change meaning. */
     struct {
@@ -110,7 +115,8 @@ private:
         Point point;
         double value = 0;
     } cached;
-    int iterations = 0, evaluations = 0;
+    /** Over the whole search; since the springs were last stiffened (the reporter's iteration). */
+    int iterations = 0, roundIterations = 0, evaluations = 0;
     std::string failure;  // set when an evaluation found something not finite
 };
 
