@@ -18,10 +18,13 @@ struct OPENMM_EXPORT_MRATTLE RigidBodyMinimizationReport {
     /** Potential energy at the start (after the free particles' constraints are applied) and at the end. */
     double initialEnergy = 0, finalEnergy = 0;
     /**
-     * Root mean square over the System's particles of the generalized force at the end,
-     * sqrt(|g|^2 / N): per body |F|^2/n + tau . I^-1 tau (net force F and torque tau about its
-     * centroid, I its inertia with unit masses: the force projected on rigid motion), plus each
-     * free particle's |f|^2 with the constraint springs.
+     * The root mean square generalized force at the end, per degree of freedom in units of
+     * one particle's force, sqrt(3 |g|^2 / D), the quantity the tolerance bounds: |g|^2 is per
+     * body |F|^2/n + tau . I^-1 tau (net force F and torque tau about its centroid, I its
+     * inertia with unit masses: the force projected on rigid motion), plus each free
+     * particle's |f|^2 with the constraint springs; D counts 6 per body (5 linear, 3 a
+     * point) and 3 per free particle. For free particles alone it is OpenMM's rms force over
+     * particles.
      */
     double rmsForce = 0;
 };
@@ -108,12 +111,12 @@ public:
      * that is a rigid-body one, else its first rigid-body member).
      *
      * @param context        the Context to minimize; on exit it holds the new positions
-     * @param tolerance      as LocalEnergyMinimizer's, in kJ/mol/nm: the search stops once
-     *                       |g| <= tolerance * max(1, |x|) / max(1, rms|x0|), the test of OpenMM
-     *                       7.7 to 8.4 (|x| over all Cartesian coordinates, x0 the start), i.e.
-     *                       about when the root mean square over particles of the (generalized)
-     *                       force, rmsForce, reaches the tolerance; OpenMM 8.5's GPU minimizer
-     *                       tests rms = tolerance exactly. Must be finite and >= 0 (default 10).
+     * @param tolerance      in kJ/mol/nm: the search stops once the rms generalized force per
+     *                       degree of freedom (RigidBodyMinimizationReport::rmsForce) is at most
+     *                       this, unscaled, as OpenMM 8.5's device minimizer tests its rms force
+     *                       (docs/minimization.md, convergence: why per degree of freedom and
+     *                       not scaled by |x| as OpenMM 7.7 to 8.4). Must be finite and >= 0
+     *                       (default 10).
      * @param maxIterations  the most L-BFGS iterations, as LocalEnergyMinimizer's (0: until
      *                       converged); here counted over all restarts. Must be >= 0.
      * @param reporter       called after each iteration (may be null); returning true stops

@@ -65,8 +65,14 @@ RigidBodySearch::RigidBodySearch(Context& context, ContextImpl& impl, const std:
     springConstant = 100 / workingConstraintTolerance;
 }
 
+double RigidBodySearch::rmsForce(const Point& point) const {
+    // Per degree of freedom, in the units of a particle's force (3 freedoms): for free
+    // particles alone this is the rms over particles that OpenMM tests.
+    return numVariables == 0 ? 0.0 : std::sqrt(3 * point.gradientNorm2 / numVariables);
+}
+
 bool RigidBodySearch::converged(const Point& point) const {
-    return std::sqrt(point.gradientNorm2) <= tolerance / startNorm * std::max(1.0, point.positionNorm);
+    return rmsForce(point) <= tolerance;
 }
 
 void RigidBodySearch::restartAt(const vector<Vec3>& positions, bool resetOrientations) {
@@ -217,7 +223,6 @@ double RigidBodySearch::evaluateUnchecked(const double* variables, double* g) {
     last.energy = potential;
     last.springEnergy = springEnergy;
     last.gradientNorm2 = norm2;
-    last.positionNorm = std::sqrt(positionNorm2);
     return energy;
 }
 
@@ -349,11 +354,6 @@ RigidBodyMinimizationReport RigidBodySearch::run() {
         startPositions = context.getState(State::Positions).getPositions();
     }
     trial = startPositions;
-    double norm = 0;
-    for (const Vec3& r : startPositions)
-        norm += r.dot(r);
-    norm /= std::max(1, system.getNumParticles());
-    startNorm = norm < 1 ? 1 : std::sqrt(norm);
     lengthScale = FirstStepRms * std::sqrt((double) std::max(1, system.getNumParticles()));
     bodies.clear();
     for (int b = 0; b < topology.getNumBodies(); b++)
@@ -404,7 +404,7 @@ RigidBodyMinimizationReport RigidBodySearch::run() {
     report.iterations = iterations;
     report.evaluations = evaluations;
     report.finalEnergy = finalEnergy;
-    report.rmsForce = std::sqrt(accepted.gradientNorm2 / std::max(1, system.getNumParticles()));
+    report.rmsForce = rmsForce(accepted);
     return report;
 }
 

@@ -64,7 +64,12 @@ private:
     /** Call the reporter with the iterate in OpenMM's terms (RigidBodySearchReport.cpp); true: stop. */
     bool reportIteration(const double* g);
     struct Point;
-    /** LocalEnergyMinimizer's test: |g| <= tolerance * max(1, |x|) / max(1, rms|x0|). */
+    /**
+     * sqrt(3 |g|^2 / D): the rms generalized force per degree of freedom (D of them, the
+     * variables), in units of one particle's force; converged when it is <= tolerance
+     * (docs/minimization.md, convergence).
+     */
+    double rmsForce(const Point& point) const;
     bool converged(const Point& point) const;
     void rebase();
     double maxFreeConstraintError(const std::vector<OpenMM::Vec3>& positions) const;
@@ -100,13 +105,12 @@ private:
     std::unique_ptr<lbfgsfloatval_t, void (*)(lbfgsfloatval_t*)> x{nullptr, lbfgs_free};
     int paddedVariables = 0;
     std::vector<OpenMM::Vec3> startPositions, trial, forces;
-    double startNorm = 1;
     /** nm per unit of liblbfgs's variables (FirstStepRms). */
     double lengthScale = 1;
 
     /** The last evaluation, and the last accepted point (liblbfgs's iterate). */
     struct Point {
-        double energy = 0, springEnergy = 0, gradientNorm2 = 0, positionNorm = 0;
+        double energy = 0, springEnergy = 0, gradientNorm2 = 0;
     } last, accepted;
     /** The last evaluation, for liblbfgs's repeat of it; invalid once the variables or springs change meaning. */
     struct {
