@@ -414,3 +414,45 @@ TEST(MinimizerReference, BadArgumentsAndIterationLimit) {
     EXPECT_EQ(3, report.iterations);
     EXPECT_LT(report.finalEnergy, report.initialEnergy);
 }
+
+TEST(MinimizerReference, ReporterSeesEachIterationAndStopsTheSearch) {
+    // Any class with OpenMM 8's report() (here the test's own) through ForwardingMinimizationReporter.
+    struct Recorder {
+        vector<int> iterations;
+        vector<double> energies;
+        int stopAt = -1;
+        bool report(int iteration, const vector<double>& x, const vector<double>& grad, std::map<std::string, double>& args) {
+            EXPECT_EQ(x.size(), grad.size());
+            EXPECT_EQ(4u, args.size());
+            iterations.push_back(iteration);
+            energies.push_back(args.at("system energy"));
+            return iteration == stopAt;
+        }
+    } recorder;
+    Cluster cluster = buildCluster(benzene(), 2, 0.62, 3);
+    MRattleIntegrator integrator(0.001);
+    Context context(*cluster.system, integrator, platform("Reference"));
+    context.setPositions(cluster.positions);
+    ForwardingMinimizationReporter<Recorder> forward(recorder);
+    RigidBodyMinimizationReport report = RigidBodyMinimizer::minimize(context, 0.1, 8, &forward);
+    EXPECT_EQ(8, report.iterations);
+    EXPECT_EQ(vector<int>({0, 1, 2, 3, 4, 5, 6, 7}), recorder.iterations);
+    EXPECT_DOUBLE_EQ(report.finalEnergy, recorder.energies.back());
+    // Stopped by the reporter: at that iterate, which the Context then holds.
+    recorder = Recorder();
+    recorder.stopAt = 1;
+    context.setPositions(cluster.positions);
+    report = RigidBodyMinimizer::minimize(context, 0.1, 0, &forward);
+    EXPECT_EQ(2, report.iterations);
+    EXPECT_EQ(vector<int>({0, 1}), recorder.iterations);
+    EXPECT_NEAR(recorder.energies.back(), potentialEnergy(context), 1e-9 * std::fabs(recorder.energies.back()));
+    // What it throws ends the search with an OpenMMException naming it.
+    struct Throwing : RigidBodyMinimizationReporter {
+        bool report(int, const vector<double>&, const vector<double>&, std::map<std::string, double>&) override {
+            throw std::runtime_error("reporter failed");
+        }
+    } throwing;
+    context.setPositions(cluster.positions);
+    const std::string message = messageOf([&] { RigidBodyMinimizer::minimize(context, 0.1, 0, &throwing); });
+    EXPECT_NE(std::string::npos, message.find("reporter failed")) << message;
+}

@@ -99,6 +99,14 @@ private:
  * evaluation, next to the force evaluation that dominates both minimizers. During the search
  * the integrator skips its own work at setPositions(); the search's last setPositions() does it.
  *
+ * C++ callers of OpenMM::LocalEnergyMinimizer::minimize() do not get this minimizer: the
+ * plugin cannot intercept that call (up to OpenMM 8.4 a function of libOpenMM; from 8.5 a
+ * MinimizeKernel that a plugin could only replace for every integrator). They get OpenMM's
+ * Cartesian minimizer, which deforms bodies whose shapes no constraints determine; the next
+ * step then throws (BodyShapeWatch). Call RigidBodyMinimizer::minimize() instead, with the
+ * same arguments. From Python, openmm.LocalEnergyMinimizer.minimize() (and so
+ * app.Simulation.minimizeEnergy()) is this minimizer after 'import mrattle'.
+ *
  * After it, the Context holds the best point found: the energy is never above the starting
  * one; the integrator's bodies keep their shapes, and the velocities are the integrator's
  * projection onto rigid motion at the new positions (as after any setPositions()).
