@@ -190,7 +190,10 @@ TEST(MinimizerReference, RigidWaterMinimumIsLocalEnergyMinimizersWithSettle) {
     const double openmmMinimum = potentialEnergy(rigid);
     EXPECT_LT(openmmMinimum, start - 10);
     report = RigidBodyMinimizer::minimize(rigid, tolerance);
-    EXPECT_LE(report.finalEnergy, openmmMinimum);
+    // No higher, to round-off: with no iteration to make (OpenMM 8.1.2's minimum passes the
+    // test) the search's energy of the same positions, rebuilt from its coordinates, differs
+    // from the State's in the last digits (1e-13 kJ/mol measured).
+    EXPECT_LE(report.finalEnergy, openmmMinimum + 1e-12 * std::fabs(openmmMinimum));
     EXPECT_GT(report.finalEnergy, openmmMinimum - 1e-2);
 }
 
