@@ -24,15 +24,17 @@ Eigen::Vector3d eigen(const Vec3& v) {
 }
 
 /**
- * The test's own RMS generalized force over the System's particles: per body |F|^2/n +
- * tau . I^+ tau (torque about the centroid, unit-mass inertia, pseudo-inverse for a linear
- * body), per free particle |f|^2.
+ * The test's own RMS generalized force, per degree of freedom in units of a particle's force
+ * (sqrt(3 sum / D), D: 3 per body plus its rotations, 3 per free particle; the minimizer's
+ * test): per body |F|^2/n + tau . I^+ tau (torque about the centroid, unit-mass inertia,
+ * pseudo-inverse for a linear body), per free particle |f|^2.
  */
 double rmsGeneralizedForce(Context& context, const vector<vector<int> >& bodies, const vector<int>& freeParticles) {
     State state = context.getState(State::Positions | State::Forces);
     const vector<Vec3>& x = state.getPositions();
     const vector<Vec3>& f = state.getForces();
     double sum = 0;
+    int freedoms = 3 * freeParticles.size();
     for (const vector<int>& body : bodies) {
         Eigen::Vector3d centroid = Eigen::Vector3d::Zero(), force = Eigen::Vector3d::Zero(),
                         torque = Eigen::Vector3d::Zero();
@@ -47,13 +49,16 @@ double rmsGeneralizedForce(Context& context, const vector<vector<int> >& bodies,
         }
         Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> principal(inertia);
         for (int k = 0; k < 3; k++)
-            if (principal.eigenvalues()[k] > 1e-9 * principal.eigenvalues()[2])
+            if (principal.eigenvalues()[k] > 1e-9 * principal.eigenvalues()[2]) {
                 sum += std::pow(principal.eigenvectors().col(k).dot(torque), 2) / principal.eigenvalues()[k];
+                freedoms++;
+            }
         sum += force.squaredNorm() / body.size();
+        freedoms += 3;
     }
     for (int i : freeParticles)
         sum += f[i].dot(f[i]);
-    return std::sqrt(sum / x.size());
+    return std::sqrt(3 * sum / freedoms);
 }
 
 /** Largest |d . (v_i - v_j)| over pairs of a body (d = x_i - x_j): zero for rigid motion. */
@@ -111,9 +116,9 @@ TEST_P(Minimizer, BenzeneClusterLowersEnergyKeepsShapesAndStepsRigidly) {
     const vector<Vec3> minimized = positionsOf(*context);
     EXPECT_LT(maxDistanceChange(cluster.positions, minimized, cluster.molecules), 1e-12);
     EXPECT_GT(maxDeviation(cluster.positions, minimized), 1e-3);  // it did move
-    // Converged in LocalEnergyMinimizer's sense, measured independently of the minimizer.
+    // Converged by the minimizer's test (rms per degree of freedom), measured independently of it.
     const double rms = rmsGeneralizedForce(*context, cluster.molecules, {});
-    EXPECT_LE(rms, 1.05 * tolerance);
+    EXPECT_LE(rms, tolerance * (1 + 1e-9));
     EXPECT_NEAR(rms, report.rmsForce, 1e-6 * tolerance + 1e-6 * rms);
     // Velocities are rigid at the new positions, and dynamics go on with the same shapes.
     EXPECT_LT(maxRigidityRate(*context, cluster.molecules), 1e-10);
@@ -185,7 +190,10 @@ TEST(MinimizerReference, RigidWaterMinimumIsLocalEnergyMinimizersWithSettle) {
     const double openmmMinimum = potentialEnergy(rigid);
     EXPECT_LT(openmmMinimum, start - 10);
     report = RigidBodyMinimizer::minimize(rigid, tolerance);
-    EXPECT_LE(report.finalEnergy, openmmMinimum);
+    // No higher, to round-off: with no iteration to make (OpenMM 8.1.2's minimum passes the
+    // test) the search's energy of the same positions, rebuilt from its coordinates, differs
+    // from the State's in the last digits (1e-13 kJ/mol measured).
+    EXPECT_LE(report.finalEnergy, openmmMinimum + 1e-12 * std::fabs(openmmMinimum));
     EXPECT_GT(report.finalEnergy, openmmMinimum - 1e-2);
 }
 

@@ -1,6 +1,7 @@
 // Drift and reset: a body's rotation solve and M-RATTLE's position reset, one body or four at a time.
 #include "mrattle/RigidBodyMath.h"
 #include "mrattle/Coordinates.h"
+#include "mrattle/RigidBodyCoordinates.h"
 #include "RigidBodyMathDetail.h"
 #include "TorqueCondition.h"
 #include <algorithm>
@@ -19,13 +20,6 @@ Vector3d vexOfSkewPart(const Matrix3d& A) {
     return Vector3d(A(2, 1) - A(1, 2), A(0, 2) - A(2, 0), A(1, 0) - A(0, 1));
 }
 
-Matrix3d crossMatrix(const Vector3d& w) {
-    Matrix3d m;
-    m << 0, -w.z(), w.y(),
-         w.z(), 0, -w.x(),
-         -w.y(), w.x(), 0;
-    return m;
-}
 
 /**
  * Linear body: the condition u x (j p - w) = 0 (u the old axis, p = P u the new one,

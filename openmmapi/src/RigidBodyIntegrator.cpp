@@ -162,6 +162,7 @@ void RigidBodyIntegrator::initialize(ContextImpl& contextRef) {
     kernel = contextRef.getPlatform().createKernel(getStepKernelName(), contextRef);
     kernel.getAs<RigidBodyKernel>().initialize(system, topology, *this);
     stepState.reset();
+    shapeWatch.reset();
 }
 
 void RigidBodyIntegrator::cleanup() {
@@ -185,10 +186,14 @@ void RigidBodyIntegrator::stateChanged(State::DataType changed) {
     if (context == nullptr || (minimizing && changed == State::Positions))
         return;
     // OpenMM's last notification of a checkpoint load: continue as the run that wrote it.
-    if (changed == State::Energy && stepState.finishCheckpointLoad(context->getStepCount()))
+    if (changed == State::Energy && stepState.finishCheckpointLoad(context->getStepCount())) {
+        shapeWatch.reset();
         return;
-    if (changed == State::Positions)
+    }
+    if (changed == State::Positions) {
         useNewPositions();
+        shapeWatch.positionsSet(*context);
+    }
     if (changed == State::Positions || changed == State::Velocities)
         useNewVelocities(changed == State::Positions);
 }
@@ -266,6 +271,7 @@ vector<Vec3> RigidBodyIntegrator::getVelocitiesForTemperature(const System& syst
 void RigidBodyIntegrator::step(int steps) {
     requireContext();
     stepState.requireSteppable(getStepSize());
+    shapeWatch.requireShapesKept(*context, topology);
     for (int i = 0; i < steps; i++) {
         // Another integrator (of a CompoundIntegrator) stepped since this one did, or
         // velocities were set while it was not current: this integrator's bodies decide

@@ -80,10 +80,10 @@ from .interactions import removeIntraBodyInteractions
 from .topology import rigidBodies, declareRigidBodies
 from . import models, baselines
 from .serialization import asPluginIntegrator, installXmlSerializerHooks as _installXmlSerializerHooks
-from .minimize import minimizeEnergy, RigidBodyMinimizer, installSimulationHook as _installSimulationHook
+from .minimize import minimizeEnergy, RigidBodyMinimizer, installLocalEnergyMinimizerHook as _installMinimizerHook
 
 _installXmlSerializerHooks()
-_installSimulationHook()
+_installMinimizerHook()
 
 
 __all__ = ['RigidBodyIntegrator', 'MRattleIntegrator', 'MRattleLangevinIntegrator', 'RigidSplittingIntegrator', 'StateDataReporter', 'degreesOfFreedom',

@@ -1,16 +1,17 @@
 """Energy minimization that keeps the rigid bodies rigid.
 
-``mrattle.minimizeEnergy(context, tolerance, maxIterations)`` is ``openmm.LocalEnergyMinimizer.minimize``
-for a Context whose integrator is one of the plugin's (the C++ ``RigidBodyMinimizer``): the
-bodies move by translations and rotations, so their shapes never change. After
-``import mrattle``, ``app.Simulation.minimizeEnergy()`` does the same for such a Simulation.
+``mrattle.minimizeEnergy(context, tolerance, maxIterations, reporter)`` is
+``openmm.LocalEnergyMinimizer.minimize`` for a Context whose integrator is one of the plugin's
+(the C++ ``RigidBodyMinimizer``): the bodies move by translations and rotations, so their
+shapes never change. After ``import mrattle``, ``openmm.LocalEnergyMinimizer.minimize`` itself
+does the same for such a Context, and so ``app.Simulation.minimizeEnergy()``, which calls it.
 """
-import functools
 import operator
 
+import openmm as _openmm
 import openmm.unit as _unit
 
-from .integrators import RigidBodyMinimizer
+from .integrators import RigidBodyMinimizer, _minimizeReporting
 
 #: LocalEnergyMinimizer's default tolerance, as app.Simulation.minimizeEnergy gives it.
 DEFAULT_TOLERANCE = 10 * _unit.kilojoules_per_mole / _unit.nanometer
@@ -29,7 +30,7 @@ def _toleranceValue(tolerance):
                         % (tolerance,)) from None
 
 
-def minimizeEnergy(context, tolerance=DEFAULT_TOLERANCE, maxIterations=0):
+def minimizeEnergy(context, tolerance=DEFAULT_TOLERANCE, maxIterations=0, reporter=None):
     """Minimize the potential energy over rigid-body coordinates, like LocalEnergyMinimizer.minimize.
 
     Parameters
@@ -38,11 +39,17 @@ def minimizeEnergy(context, tolerance=DEFAULT_TOLERANCE, maxIterations=0):
         A Context whose integrator is a mrattle integrator (or a CompoundIntegrator holding one);
         on return it holds the minimized positions.
     tolerance : force Quantity or float (kJ/mol/nm)
-        As LocalEnergyMinimizer's: the search stops once the root mean square over particles of
-        the generalized force (each body's net force and torque, projected on its rigid motion)
-        reaches it.
+        As LocalEnergyMinimizer's: the search stops once the root mean square of the
+        generalized force (each body's net force and torque, projected on its rigid motion)
+        reaches it (docs/minimization.md, convergence).
     maxIterations : int
         The most L-BFGS iterations (0: until converged).
+    reporter : openmm.MinimizationReporter or None
+        Any object with OpenMM 8's ``report(iteration, x, grad, args)``, called after each
+        iteration with the Cartesian positions, the gradient projected on rigid motion (tuples
+        of floats, flattened) and a dict of "system energy", "restraint energy", "restraint
+        strength" and "max constraint error"; returning True stops the search. An exception
+        it raises is raised again, with the Context at the best point found.
 
     Returns
     -------
@@ -53,33 +60,35 @@ def minimizeEnergy(context, tolerance=DEFAULT_TOLERANCE, maxIterations=0):
         maxIterations = operator.index(maxIterations)
     except TypeError:
         raise TypeError('minimizeEnergy: maxIterations must be an integer, got %r' % (maxIterations,)) from None
-    return RigidBodyMinimizer.minimize(context, _toleranceValue(tolerance), maxIterations)
+    tolerance = _toleranceValue(tolerance)
+    if reporter is None:
+        return RigidBodyMinimizer.minimize(context, tolerance, maxIterations)
+    if not callable(getattr(reporter, 'report', None)):
+        raise TypeError('minimizeEnergy: the reporter must have a report(iteration, x, grad, args) method '
+                        '(an openmm.MinimizationReporter), got %r' % (reporter,))
+    return _minimizeReporting(context, tolerance, maxIterations, reporter)
 
 
-def installSimulationHook():
-    """Make app.Simulation.minimizeEnergy minimize rigidly when the Simulation's integrator is the plugin's.
+def installLocalEnergyMinimizerHook():
+    """Make openmm.LocalEnergyMinimizer.minimize rigid when the Context's integrator is the plugin's.
 
-    OpenMM offers no public hook for the minimizer a Simulation uses, so this replaces the
-    public method once (at import) and keeps OpenMM's for every other integrator.
+    OpenMM offers no public hook for its minimizer, so this replaces that public static
+    method once (at import) and calls OpenMM's own for every other integrator.
+    app.Simulation.minimizeEnergy calls it (OpenMM 7.7 and 8.x), so it needs no hook of its own.
     """
-    from openmm import app
-    openmmMinimizeEnergy = app.Simulation.minimizeEnergy
-    if getattr(openmmMinimizeEnergy, '_mrattleOpenMM', None) is not None:
+    openmmMinimize = _openmm.LocalEnergyMinimizer.minimize
+    if getattr(openmmMinimize, '_mrattleOpenMM', None) is not None:
         return  # installed already
 
-    @functools.wraps(openmmMinimizeEnergy)
-    def simulationMinimizeEnergy(self, tolerance=DEFAULT_TOLERANCE, maxIterations=0, *args, **kwargs):
-        if not RigidBodyMinimizer.appliesTo(self.context):
-            return openmmMinimizeEnergy(self, tolerance, maxIterations, *args, **kwargs)
-        # OpenMM 8 adds a MinimizationReporter argument, which reports Cartesian steps.
-        extra = [a for a in args if a is not None] + [k for k, v in kwargs.items() if v is not None]
-        if extra:
-            raise TypeError('Simulation.minimizeEnergy: with a mrattle integrator only tolerance and maxIterations '
-                            'are supported (the rigid-body minimizer takes no reporter), got %s' % (extra,))
-        minimizeEnergy(self.context, tolerance, maxIterations)
+    def minimize(context, tolerance=DEFAULT_TOLERANCE, maxIterations=0, reporter=None):
+        if not RigidBodyMinimizer.appliesTo(context):
+            if reporter is None:  # OpenMM 7.7's takes no reporter
+                return openmmMinimize(context, tolerance, maxIterations)
+            return openmmMinimize(context, tolerance, maxIterations, reporter)
+        minimizeEnergy(context, tolerance, maxIterations, reporter)
 
-    simulationMinimizeEnergy.__doc__ = (openmmMinimizeEnergy.__doc__ or '') + (
+    minimize.__doc__ = (openmmMinimize.__doc__ or '') + (
         '\n        With a mrattle integrator (also inside a CompoundIntegrator) this is mrattle.minimizeEnergy:\n'
         '        the rigid bodies translate and rotate, keeping their shapes.\n')
-    simulationMinimizeEnergy._mrattleOpenMM = openmmMinimizeEnergy
-    app.Simulation.minimizeEnergy = simulationMinimizeEnergy
+    minimize._mrattleOpenMM = openmmMinimize
+    _openmm.LocalEnergyMinimizer.minimize = staticmethod(minimize)

@@ -20,6 +20,9 @@ from openmm import unit
 #include "RigidBodyMinimizer.h"
 #include <climits>
 #include <exception>
+#include <map>
+#include <stdexcept>
+#include <string>
 #include <vector>
 
 /* C++ exceptions reach Python as openmm.OpenMMException, as with OpenMM's own wrappers. */
@@ -248,8 +251,88 @@ void _checkWellFormedXml(const char* document) {
 }
 %}
 
-/* The rigid-body minimizer; mrattle.minimizeEnergy (minimize.py) adds units. */
+/* The rigid-body minimizer; mrattle.minimizeEnergy (minimize.py) adds units and the reporter. */
+%ignore MRattlePlugin::ForwardingMinimizationReporter;
+%ignore MRattlePlugin::RigidBodyMinimizationReporter;
 %include "RigidBodyMinimizer.h"
+%{
+/*
+ * A Python reporter (any object with OpenMM 8's report(iteration, x, grad, args): x and grad
+ * tuples of floats, args a dict) for RigidBodyMinimizer::minimize. An exception it raises
+ * is kept and raised again by _minimizeReporting, after the Context is left at the best point.
+ */
+class PythonMinimizationReporter : public MRattlePlugin::RigidBodyMinimizationReporter {
+public:
+    explicit PythonMinimizationReporter(PyObject* reporter) : reporter(reporter) {
+    }
+    ~PythonMinimizationReporter() {
+        Py_XDECREF(type);
+        Py_XDECREF(value);
+        Py_XDECREF(traceback);
+    }
+    bool report(int iteration, const std::vector<double>& x, const std::vector<double>& grad,
+                std::map<std::string, double>& args) override {
+        PyObject* xs = PyTuple_New(x.size());
+        PyObject* grads = PyTuple_New(grad.size());
+        PyObject* argDict = PyDict_New();
+        for (size_t i = 0; i < x.size(); i++)
+            PyTuple_SET_ITEM(xs, i, PyFloat_FromDouble(x[i]));
+        for (size_t i = 0; i < grad.size(); i++)
+            PyTuple_SET_ITEM(grads, i, PyFloat_FromDouble(grad[i]));
+        for (const auto& entry : args) {
+            PyObject* number = PyFloat_FromDouble(entry.second);
+            PyDict_SetItemString(argDict, entry.first.c_str(), number);
+            Py_DECREF(number);
+        }
+        PyObject* result = PyObject_CallMethod(reporter, "report", "iOOO", iteration, xs, grads, argDict);
+        Py_DECREF(xs);
+        Py_DECREF(grads);
+        Py_DECREF(argDict);
+        int stop = result != NULL ? PyObject_IsTrue(result) : -1;
+        Py_XDECREF(result);
+        if (stop < 0) {
+            PyErr_Fetch(&type, &value, &traceback);
+            throw std::runtime_error("the Python reporter's report() raised an exception");
+        }
+        return stop != 0;
+    }
+    /** Raise the reporter's exception again; false if it raised none. */
+    bool restoreError() {
+        if (type == NULL)
+            return false;
+        PyErr_Restore(type, value, traceback);
+        type = value = traceback = NULL;
+        return true;
+    }
+
+private:
+    PyObject* reporter;
+    PyObject* type = NULL;
+    PyObject* value = NULL;
+    PyObject* traceback = NULL;
+};
+%}
+%exception _minimizeReporting {
+    $action
+    if (result == NULL)
+        SWIG_fail;
+}
+%inline %{
+/* RigidBodyMinimizer::minimize with a Python reporter: the report, or NULL with the Python error set. */
+PyObject* _minimizeReporting(OpenMM::Context& context, double tolerance, int maxIterations, PyObject* reporter) {
+    PythonMinimizationReporter forward(reporter);
+    MRattlePlugin::RigidBodyMinimizationReport report;
+    try {
+        report = MRattlePlugin::RigidBodyMinimizer::minimize(context, tolerance, maxIterations, &forward);
+    } catch (const std::exception& e) {
+        if (!forward.restoreError())
+            raiseOpenMMException(e.what());
+        return NULL;
+    }
+    return SWIG_NewPointerObj(new MRattlePlugin::RigidBodyMinimizationReport(report),
+                              SWIGTYPE_p_MRattlePlugin__RigidBodyMinimizationReport, SWIG_POINTER_OWN);
+}
+%}
 
 /* The plugin's class of a deserialized integrator (None for other integrators); the package moves the ownership over. */
 %inline %{
