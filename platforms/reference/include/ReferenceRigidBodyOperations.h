@@ -20,7 +20,7 @@ namespace MRattlePlugin {
  * The rigid-body work on host arrays of positions and velocities that the phases of a step
  * (ReferenceRigidBodyDynamics) are made of, on the Reference and CPU platforms: the
  * kernel's copy of the body topology and its per-configuration state (which bodies are
- * linear), access to the Context's arrays, RATTLE for constraints among free particles
+ * linear), RATTLE for constraints among free particles
  * (OpenMM's own ReferenceConstraints), velocity projection, kinetic energy, temperature
  * velocities and the Andersen body collisions with their random stream, on the CPU
  * platform's threads.
