@@ -354,7 +354,117 @@ TEST_P(DevicePlatform, FailedStepIsReportedWithTheStateBeforeIt) {
     }
 }
 
+namespace {
 
+/**
+ * A diatomic body in a periodic 3 nm box with a cutoff (so that the device reorders and
+ * wraps atoms: first at the end of the first step), and a strip 1.3 < x < 2 where a huge
+ * force along -y acts: an atom entering it spins the body up so fast that no rotation
+ * satisfies its next reset.
+ */
+System stripSystem() {
+    System system;
+    system.setDefaultPeriodicBoxVectors(Vec3(3, 0, 0), Vec3(0, 3, 0), Vec3(0, 0, 3));
+    system.addParticle(12.0);
+    system.addParticle(16.0);
+    HarmonicBondForce* bond = new HarmonicBondForce();  // one molecule for OpenMM's wrapping
+    bond->addBond(0, 1, 0.1, 0.0);
+    system.addForce(bond);
+    CustomExternalForce* strip = new CustomExternalForce("1e7*y*step(x-1.3)*step(2-x)");
+    strip->addParticle(0, {});
+    strip->addParticle(1, {});
+    system.addForce(strip);
+    NonbondedForce* cutoff = new NonbondedForce();
+    cutoff->setNonbondedMethod(NonbondedForce::CutoffPeriodic);
+    cutoff->setCutoffDistance(1.0);
+    cutoff->addParticle(0, 0.1, 0);
+    cutoff->addParticle(0, 0.1, 0);
+    cutoff->addException(0, 1, 0, 0.1, 0);
+    system.addForce(cutoff);
+    return system;
+}
+
+} // namespace
+
+TEST_P(DevicePlatform, AFailureInsideStepNIsFoundLateAndUndoneExactly) {
+    // The device checks the failure flag one step late and at the end of step(n): a run of
+    // step(300) that fails at about step 100 must end exactly as step(1) calls do just
+    // before the failing step (positions, velocities, time, step count), and raise.
+    System system = stripSystem();
+    const vector<Vec3> positions = {Vec3(1.0, 1.5, 1.5), Vec3(1.1, 1.5, 1.5)};
+    const vector<Vec3> velocities = {Vec3(1, 0, 0), Vec3(1, 0, 0)};
+    State beforeFailure;
+    string stepwiseMessage;
+    {
+        MRattleIntegrator integrator(0.002);
+        std::unique_ptr<Context> context = deviceContext(GetParam(), system, integrator, "double");
+        context->setPositions(positions);
+        context->setVelocities(velocities);
+        for (int i = 0; i < 300 && stepwiseMessage.empty(); i++) {
+            State state = context->getState(State::Positions | State::Velocities);
+            try {
+                integrator.step(1);
+            } catch (const OpenMMException& e) {
+                stepwiseMessage = e.what();
+                beforeFailure = state;
+            }
+        }
+    }
+    ASSERT_NE(string::npos, stepwiseMessage.find("no rotation")) << stepwiseMessage;
+    ASSERT_GT(beforeFailure.getStepCount(), 50);
+    MRattleIntegrator integrator(0.002);
+    std::unique_ptr<Context> context = deviceContext(GetParam(), system, integrator, "double");
+    context->setPositions(positions);
+    context->setVelocities(velocities);
+    const string message = messageOf([&] { integrator.step(300); });
+    EXPECT_EQ(0u, message.find("MRattleIntegrator: at step " + std::to_string(beforeFailure.getStepCount()) + " "))
+        << message;
+    State state = context->getState(State::Positions | State::Velocities);
+    std::cout << "a failure at step " << beforeFailure.getStepCount() << " inside step(300) on " << GetParam()
+              << ": state put back within " << maxDeviation(beforeFailure.getPositions(), state.getPositions())
+              << " nm of the stepwise run's" << std::endl;
+    EXPECT_EQ(beforeFailure.getStepCount(), state.getStepCount());
+    EXPECT_EQ(beforeFailure.getTime(), state.getTime());
+    EXPECT_EQ(0.0, maxDeviation(beforeFailure.getPositions(), state.getPositions()));
+    EXPECT_EQ(0.0, maxDeviation(beforeFailure.getVelocities(), state.getVelocities()));
+    // Usable again once the body is out of the strip.
+    context->setPositions(positions);
+    context->setVelocities(velocities);
+    integrator.step(10);
+    EXPECT_EQ(beforeFailure.getStepCount() + 10, context->getState(State::Positions).getStepCount());
+}
+
+TEST_P(DevicePlatform, AFailureFoundAtAReorderingIsUndoneInTheNewOrder) {
+    // A spinning body drifts across the box's edge in 249 short steps; then a step ten
+    // times as long fails (no rotation), and OpenMM's next reordering (every 250 steps; it
+    // wraps the body back by a box vector) comes before the lazy check, so the failure is
+    // found there: the state put back is the one before the failed step, as OpenMM reports
+    // it (cell offsets undone), in mixed precision.
+    System system = stripSystem();
+    const vector<Vec3> positions = {Vec3(2.80, 0.5, 0.5), Vec3(2.90, 0.5, 0.5)};
+    const vector<Vec3> velocities = {Vec3(2, 50 * 16.0 / 28, 0), Vec3(2, -50 * 12.0 / 28, 0)};
+    MRattleIntegrator integrator(0.0005);
+    std::unique_ptr<Context> context = deviceContext(GetParam(), system, integrator, "mixed");
+    context->setPositions(positions);
+    context->setVelocities(velocities);
+    integrator.step(249);
+    const State before = context->getState(State::Positions | State::Velocities);
+    ASSERT_GT(0.5 * (before.getPositions()[0][0] + before.getPositions()[1][0]), 3.0);  // across the edge
+    integrator.setStepSize(0.01);
+    const string message = messageOf([&] { integrator.step(3); });
+    EXPECT_EQ(0u, message.find("MRattleIntegrator: at step 249 ")) << message;
+    State state = context->getState(State::Positions | State::Velocities);
+    EXPECT_EQ(249, state.getStepCount());
+    EXPECT_EQ(before.getTime(), state.getTime());
+    EXPECT_LT(maxDeviation(before.getPositions(), state.getPositions()), 1e-12);
+    EXPECT_EQ(0.0, maxDeviation(before.getVelocities(), state.getVelocities()));
+    integrator.setStepSize(0.0005);
+    integrator.step(5);
+    state = context->getState(State::Positions);
+    EXPECT_EQ(254, state.getStepCount());
+    const Vec3 bond = state.getPositions()[1] - state.getPositions()[0];
+    EXPECT_LT(std::fabs(std::sqrt(bond.dot(bond)) - 0.1), 1e-6);
+}
 
 INSTANTIATE_TEST_SUITE_P(Devices, DevicePlatform, ::testing::ValuesIn(builtDevicePlatforms()),
                          [](const ::testing::TestParamInfo<string>& info) { return info.param; });

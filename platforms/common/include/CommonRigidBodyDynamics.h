@@ -3,6 +3,7 @@
 
 #include "BodyShapeConstraints.h"
 #include "CommonBodyKineticEnergy.h"
+#include "CommonStepFailure.h"
 #include "RigidBodyTopology.h"
 #include "mrattle/RigidBodyMath.h"
 #include "openmm/System.h"
@@ -28,7 +29,7 @@ class RigidBodyIntegrator;
  * (OpenCL, CUDA), as ReferenceRigidBodyDynamics does on Reference and CPU: the body and
  * free-constraint arrays on the device (mapped to the device's atom order whenever OpenMM
  * reorders atoms), the phases of a step (kicks, drift and reset, projection, forces), the
- * failure check at the end of every step with the state put back, shapes, temperature
+ * failure check (CommonStepFailure: lazy within step(n), the state put back), shapes, temperature
  * velocities, kinetic energy and checkpoints. One work item per body or per cluster of
  * free constraints. An integrator's kernel (CommonMRattleKernels.h, ...) sequences the
  * phases.
@@ -57,7 +58,7 @@ public:
     }
     /** The failure flag, for an integrator's own kernels. */
     OpenMM::ComputeArray& failureFlag() {
-        return failure;
+        return stepFailure.flag();
     }
 
     /**
@@ -75,11 +76,14 @@ public:
     /** Virtual sites at the new positions, then the forces there. */
     void computeForces(OpenMM::ContextImpl& context, const RigidBodyIntegrator& integrator, bool& forcesAreValid);
     /**
-     * The end of every step: if anything of it failed, put the state back and throw an
-     * OpenMMException (time and step count unchanged); else advance the clock and let
-     * OpenMM reorder atoms (the forces are then no longer those of the atoms' order).
+     * The end of every step: advance the clock, let OpenMM reorder atoms (the forces are
+     * then no longer those of the atoms' order), and check the previous step's failure flag
+     * without waiting for this one's (CommonStepFailure): a failure found puts back the
+     * state from before the failed step and throws an OpenMMException.
      */
     void endStep(double stepSize, bool& forcesAreValid);
+    /** The end of a step(n) call: the blocking check of the steps not yet checked. */
+    void finishSteps();
 
     /** RigidBodyKernel's work, the same for every integrator. */
     void updateShapes(OpenMM::ContextImpl& context);
@@ -103,11 +107,10 @@ private:
     void setKernelArguments();
     /** How far (nm) the device's stored coordinates can be from these positions (0 in double precision). */
     double storageError(OpenMM::ContextImpl& context, const std::vector<OpenMM::Vec3>& positions) const;
-    /** Throw, with the state put back, if the failure flag is set. */
-    void checkStep();
 
     OpenMM::ComputeContext& cc;
-    const std::string integratorName;
+    /** Mutable: a checkpoint (const) is written only after the unchecked steps are checked. */
+    mutable CommonStepFailure stepFailure;
     RigidBodyTopology bodies;
     std::vector<int> systemBodyAtoms, systemConstraintAtoms;  // System atom indices, body-major / cluster-major
     std::vector<RigidBodyMath::Shape> shapes;
@@ -122,13 +125,13 @@ private:
     bool writingCorrectedShapes = false;
     OpenMM::ComputeProgram program;
     OpenMM::ComputeArray bodyStart, bodyAtoms, bodyLinear, clusterStart, constraintAtoms, constraintDistance;
-    OpenMM::ComputeArray newVelocity, failure, posqBackup, correctionBackup, velmBackup;
+    OpenMM::ComputeArray newVelocity;
     OpenMM::ComputeKernel kickAndDrift, resetBodies, constrainFreePositions, applyPositionStep, kickVelocities,
         projectBodies, constrainFreeVelocities, collideBodies, backupState;
     // Indices of the arguments set at each launch.
     int kickAndDriftKickTime, kickAndDriftDriftTime, resetBodiesDriftTime, freePositionsDriftTime,
         freePositionsTolerance, kickVelocitiesTime, projectOnlyIfNotRigid, freeVelocitiesTolerance, collideKT,
-        collideRandomIndex;
+        collideRandomIndex, backupStepIndex;
 };
 
 } // namespace MRattlePlugin

@@ -77,6 +77,7 @@ public:
     void execute() override {
         owner.mapAtoms();
         owner.atomsReordered = true;
+        owner.stepFailure.atomsReordered();
     }
 
 private:
@@ -84,7 +85,7 @@ private:
 };
 
 CommonRigidBodyDynamics::CommonRigidBodyDynamics(ComputeContext& cc, const std::string& integratorName)
-    : cc(cc), integratorName(integratorName) {
+    : cc(cc), stepFailure(cc, integratorName) {
 }
 
 CommonRigidBodyDynamics::~CommonRigidBodyDynamics() {
@@ -134,13 +135,7 @@ void CommonRigidBodyDynamics::initialize(const System& system, const RigidBodyTo
     if (!distances.empty())
         constraintDistance.upload(distances, true);
     newVelocity.initialize(cc, cc.getPaddedNumAtoms(), vectorSize, "mrattleNewVelocity");
-    failure.initialize<int>(cc, 1, "mrattleFailure");
-    failure.upload(vector<int>(1, 0));
-    // The state at the start of each step, put back if the step fails.
-    posqBackup.initialize(cc, cc.getPaddedNumAtoms(), cc.getPosq().getElementSize(), "mrattlePosqBackup");
-    if (cc.getUseMixedPrecision())
-        correctionBackup.initialize(cc, cc.getPaddedNumAtoms(), cc.getPosq().getElementSize(), "mrattleCorrectionBackup");
-    velmBackup.initialize(cc, cc.getPaddedNumAtoms(), vectorSize, "mrattleVelmBackup");
+    stepFailure.initialize();
     mapAtoms();
     cc.addReorderListener(new ReorderListener(*this));
     bodyKineticEnergy.reset(new CommonBodyKineticEnergy(cc, numBodies, bodyStart, bodyAtoms));
@@ -237,7 +232,7 @@ void CommonRigidBodyDynamics::setKernelArguments() {
     drift.add(cc.getLongForceBuffer());
     drift.add(integration.getPosDelta());
     drift.add(newVelocity);
-    drift.add(failure);
+    drift.add(stepFailure.flag());
 
     CommonKernelArguments reset(resetBodies, doubleMixed);
     reset.add(numBodies);
@@ -249,7 +244,7 @@ void CommonRigidBodyDynamics::setKernelArguments() {
     reset.add(correction);
     reset.add(integration.getPosDelta());
     reset.add(newVelocity);
-    reset.add(failure);
+    reset.add(stepFailure.flag());
 
     CommonKernelArguments freePositions(constrainFreePositions, doubleMixed);
     freePositions.add(numClusters);
@@ -262,7 +257,7 @@ void CommonRigidBodyDynamics::setKernelArguments() {
     freePositions.add(integration.getPosDelta());
     freePositions.add(newVelocity);
     freePositionsTolerance = freePositions.addMixed(0.0);
-    freePositions.add(failure);
+    freePositions.add(stepFailure.flag());
 
     CommonKernelArguments apply(applyPositionStep, doubleMixed);
     apply.add(numAtoms);
@@ -271,7 +266,7 @@ void CommonRigidBodyDynamics::setKernelArguments() {
     apply.add(cc.getVelm());
     apply.add(integration.getPosDelta());
     apply.add(newVelocity);
-    apply.add(failure);
+    apply.add(stepFailure.flag());
 
     CommonKernelArguments kicks(kickVelocities, doubleMixed);
     kicks.add(numAtoms);
@@ -279,7 +274,7 @@ void CommonRigidBodyDynamics::setKernelArguments() {
     kickVelocitiesTime = kicks.addMixed(0.0);
     kicks.add(cc.getVelm());
     kicks.add(cc.getLongForceBuffer());
-    kicks.add(failure);
+    kicks.add(stepFailure.flag());
 
     CommonKernelArguments projection(projectBodies, doubleMixed);
     projection.add(numBodies);
@@ -290,7 +285,7 @@ void CommonRigidBodyDynamics::setKernelArguments() {
     projection.add(correction);
     projection.add(cc.getVelm());
     projectOnlyIfNotRigid = projection.add(0);
-    projection.add(failure);
+    projection.add(stepFailure.flag());
 
     CommonKernelArguments freeVelocities(constrainFreeVelocities, doubleMixed);
     freeVelocities.add(numClusters);
@@ -300,17 +295,18 @@ void CommonRigidBodyDynamics::setKernelArguments() {
     freeVelocities.add(correction);
     freeVelocities.add(cc.getVelm());
     freeVelocitiesTolerance = freeVelocities.addMixed(0.0);
-    freeVelocities.add(failure);
+    freeVelocities.add(stepFailure.flag());
 
     CommonKernelArguments backup(backupState, doubleMixed);
     backup.add(numAtoms);
     backup.add(posq);
     backup.add(correction);
     backup.add(cc.getVelm());
-    backup.add(posqBackup);
-    backup.add(cc.getUseMixedPrecision() ? correctionBackup : posqBackup);
-    backup.add(velmBackup);
-    backup.add(failure);
+    backup.add(stepFailure.posqBackup());
+    backup.add(stepFailure.correctionBackup());
+    backup.add(stepFailure.velmBackup());
+    backup.add(stepFailure.flag());
+    backupStepIndex = backup.add(0);
 
     if (hasAndersen) {
         CommonKernelArguments collide(collideBodies, doubleMixed);
@@ -324,7 +320,7 @@ void CommonRigidBodyDynamics::setKernelArguments() {
         collideKT = collide.addMixed(0.0);
         collide.add(integration.getRandom());
         collideRandomIndex = collide.add(0u);
-        collide.add(failure);
+        collide.add(stepFailure.flag());
     }
     argumentsSet = true;
 }
@@ -334,6 +330,7 @@ void CommonRigidBodyDynamics::beginStep(ContextImpl& context, const RigidBodyInt
     if (!argumentsSet)
         setKernelArguments();
     cc.getIntegrationUtilities().setNextStepSize(integrator.getStepSize());
+    backupState->setArg(backupStepIndex, stepFailure.stepStarted(context, integrator.getStepSize()));
     backupState->execute(cc.getNumAtoms());
     if (hasAndersen && numBodies > 0) {
         // The thermostat (updateContextState) re-drew single atoms: re-draw their whole bodies.
@@ -391,25 +388,7 @@ void CommonRigidBodyDynamics::computeForces(ContextImpl& context, const RigidBod
     context.calcForcesAndEnergy(true, false, integrator.getIntegrationForceGroups());
 }
 
-void CommonRigidBodyDynamics::checkStep() {
-    int value = 0;
-    failure.download(&value);
-    if (value == 0)
-        return;
-    // Every kernel did nothing once the failure was recorded: put back the step's start.
-    posqBackup.copyTo(cc.getPosq());
-    if (cc.getUseMixedPrecision())
-        correctionBackup.copyTo(cc.getPosqCorrection());
-    velmBackup.copyTo(cc.getVelm());
-    failure.upload(vector<int>(1, 0));
-    throw OpenMMException(integratorName + ": at step " + std::to_string(cc.getStepCount()) +
-                          " the position reset of a rigid body found no rotation, the free-particle constraints did "
-                          "not converge, or a velocity was not finite: the step size is too large for the forces, or "
-                          "they are not finite. The Context holds the state from before that step.");
-}
-
 void CommonRigidBodyDynamics::endStep(double stepSize, bool& forcesAreValid) {
-    checkStep();
     forcesAreValid = true;
     cc.setTime(cc.getTime() + stepSize);
     cc.setStepCount(cc.getStepCount() + 1);
@@ -417,6 +396,11 @@ void CommonRigidBodyDynamics::endStep(double stepSize, bool& forcesAreValid) {
     cc.reorderAtoms();
     if (atomsReordered)
         forcesAreValid = false;
+    stepFailure.stepQueued();
+}
+
+void CommonRigidBodyDynamics::finishSteps() {
+    stepFailure.synchronize();
 }
 
 double CommonRigidBodyDynamics::storageError(ContextImpl& context, const vector<Vec3>& positions) const {
@@ -436,6 +420,7 @@ double CommonRigidBodyDynamics::storageError(ContextImpl& context, const vector<
 void CommonRigidBodyDynamics::updateShapes(ContextImpl& context) {
     if (writingCorrectedShapes)
         return;  // the positions this call itself is writing: classified below, once written
+    stepFailure.rememberOrder();  // setting positions clears OpenMM's cell offsets
     // Positions were just uploaded from the host: classify on the host with the core.
     vector<Vec3> positions;
     context.getPositions(positions);
@@ -491,10 +476,12 @@ vector<Vec3> CommonRigidBodyDynamics::velocitiesForTemperature(ContextImpl& cont
 }
 
 double CommonRigidBodyDynamics::kineticEnergy() {
+    stepFailure.synchronize();
     return cc.getIntegrationUtilities().computeKineticEnergy(0.0);
 }
 
 void CommonRigidBodyDynamics::kineticEnergies(double& translational, double& rotational, double& free) {
+    stepFailure.synchronize();
     bodyKineticEnergy->compute(translational, rotational, free);
 }
 
@@ -503,6 +490,7 @@ int CommonRigidBodyDynamics::bodyDegreesOfFreedom() const {
 }
 
 void CommonRigidBodyDynamics::createCheckpoint(std::ostream& stream) const {
+    stepFailure.synchronize();
     // The random stream (Andersen collisions, Langevin noise) is OpenMM's
     // IntegrationUtilities', which OpenMM's own part of the checkpoint holds: no state here.
     HostRigidBodyRules::writeKernelState(stream, "");
@@ -513,5 +501,6 @@ void CommonRigidBodyDynamics::loadCheckpoint(std::istream& stream) {
     if (!state.empty())
         throw OpenMMException("the checkpoint's kernel data is not this platform's (a state of " +
                               std::to_string(state.size()) + " bytes where none is expected)");
-    failure.upload(vector<int>(1, 0));
+    stepFailure.reset();
+    stepFailure.rememberOrder();
 }

@@ -7,9 +7,10 @@
  * arithmetic is in 'mixed' precision (double in the mixed and double modes). Constants
  * shared with the host (iteration limits, tolerances) come from the host as defines.
  *
- * failure[0] holds 0, or 1 once a reset, a constraint or a velocity of this step
- * failed: every kernel that would change the state then does nothing; the host reads it
- * at the end of every step and puts back the state from before that step.
+ * failure[0] holds 0, or 1 once a reset, a constraint or a velocity of a step failed:
+ * every kernel that would change the state then does nothing, until the host finds it (one
+ * step late, or at the end of step(n): CommonStepFailure.h) and puts back the state from
+ * before that step, whose index backupState keeps in failure[1].
  */
 
 /* A body's shape, as the host classifies it when positions are set (bodyLinear[body]). */

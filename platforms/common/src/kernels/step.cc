@@ -111,12 +111,18 @@ KERNEL void kickVelocities(int numAtoms, int paddedNumAtoms, mixed kickTime,
     }
 }
 
-/** Copy the state at the start of a step, unless a failure was recorded (the copy then keeps the state before it). */
+/**
+ * Copy the state at the start of a step, and the step's index (since the host's last check)
+ * into failure[1], unless a failure was recorded: the copy then keeps the state before the
+ * failed step, and failure[1] its index.
+ */
 KERNEL void backupState(int numAtoms, GLOBAL const real4* RESTRICT posq, GLOBAL const real4* RESTRICT posqCorrection,
         GLOBAL const mixed4* RESTRICT velm, GLOBAL real4* RESTRICT posqBackup, GLOBAL real4* RESTRICT correctionBackup,
-        GLOBAL mixed4* RESTRICT velmBackup, GLOBAL const int* RESTRICT failure) {
+        GLOBAL mixed4* RESTRICT velmBackup, GLOBAL int* RESTRICT failure, int stepIndex) {
     if (failure[0] != 0)
         return;
+    if (GLOBAL_ID == 0)
+        failure[1] = stepIndex;
     for (int index = GLOBAL_ID; index < numAtoms; index += GLOBAL_SIZE) {
         posqBackup[index] = posq[index];
 #ifdef USE_MIXED_PRECISION
