@@ -102,6 +102,8 @@ public:
 
 private:
     class ReorderListener;
+    /** The device's code of a body's shape (bodyShape[body]; SHAPE_* in the device code). */
+    static int shapeCode(RigidBodyMath::Shape shape);
     /** Device atom indices of the bodies' atoms and the constraints' ends, after a reorder. */
     void mapAtoms();
     void setKernelArguments();
@@ -124,7 +126,7 @@ private:
     /** Set while updateShapes() writes corrected positions: the Context notifies the integrator again. */
     bool writingCorrectedShapes = false;
     OpenMM::ComputeProgram program;
-    OpenMM::ComputeArray bodyStart, bodyAtoms, bodyLinear, clusterStart, constraintAtoms, constraintDistance;
+    OpenMM::ComputeArray bodyStart, bodyAtoms, bodyShape, clusterStart, constraintAtoms, constraintDistance;
     OpenMM::ComputeArray newVelocity;
     OpenMM::ComputeKernel kickAndDrift, resetBodies, constrainFreePositions, applyPositionStep, kickVelocities,
         projectBodies, constrainFreeVelocities, collideBodies, backupState;

@@ -1,5 +1,4 @@
 #include "CommonRigidBodyDynamics.h"
-#include "CommonKernelArguments.h"
 #include "CommonMRattleKernelSources.h"
 #include "HostRigidBodyRules.h"
 #include "RigidBodyIntegrator.h"
@@ -12,22 +11,12 @@
 #include <cmath>
 #include <functional>
 #include <map>
-#include <sstream>
 
 using namespace MRattlePlugin;
 using namespace OpenMM;
 using std::vector;
 
 namespace {
-
-/** SHAKE and RATTLE iterations allowed for a cluster of free constraints. */
-const int MaxConstraintIterations = 1000;
-/**
- * In single precision the rotation solve converges, and velocities count as rigid, at
- * float's round-off instead of double's (RigidBodyMath::ChordConvergence,
- * RigidVelocityTolerance).
- */
-const double SingleChordConvergence = 1e-6, SingleRigidVelocityTolerance = 1e-5;
 
 /** Connected groups of free constraints (union-find over their atoms). */
 vector<vector<int> > constraintClusters(const System& system, const vector<int>& constraints) {
@@ -58,14 +47,6 @@ vector<vector<int> > constraintClusters(const System& system, const vector<int>&
     for (auto& entry : byRoot)
         clusters.push_back(entry.second);
     return clusters;
-}
-
-/** A constant as the device code reads it: in the integration arithmetic's precision. */
-std::string mixedConstant(double value) {
-    std::ostringstream text;
-    text.precision(17);
-    text << "((mixed) " << value << ")";
-    return text.str();
 }
 
 } // namespace
@@ -126,8 +107,8 @@ void CommonRigidBodyDynamics::initialize(const System& system, const RigidBodyTo
     bodyStart.initialize<int>(cc, starts.size(), "mrattleBodyStart");
     bodyStart.upload(starts);
     bodyAtoms.initialize<int>(cc, std::max<size_t>(1, systemBodyAtoms.size()), "mrattleBodyAtoms");
-    bodyLinear.initialize<int>(cc, std::max(1, numBodies), "mrattleBodyLinear");
-    bodyLinear.upload(vector<int>(std::max(1, numBodies), 0));
+    bodyShape.initialize<int>(cc, std::max(1, numBodies), "mrattleBodyShape");
+    bodyShape.upload(vector<int>(std::max(1, numBodies), shapeCode(RigidBodyMath::Shape::General)));
     clusterStart.initialize<int>(cc, clusterStarts.size(), "mrattleClusterStart");
     clusterStart.upload(clusterStarts);
     constraintAtoms.initialize<mm_int2>(cc, std::max<size_t>(1, distances.size()), "mrattleConstraintAtoms");
@@ -157,23 +138,6 @@ void CommonRigidBodyDynamics::initialize(const System& system, const RigidBodyTo
         collideBodies = program->createKernel("collideBodies");
 }
 
-ComputeProgram CommonRigidBodyDynamics::compileWith(const std::string& sources) {
-    const bool doublePrecision = cc.getUseDoublePrecision() || cc.getUseMixedPrecision();
-    std::map<std::string, std::string> defines;
-    if (doublePrecision)
-        defines["USE_DOUBLE_MIXED"] = "1";
-    defines["MAX_ROTATION_ITERATIONS"] = std::to_string(RigidBodyMath::MaxRotationIterations);
-    defines["MAX_CONSTRAINT_ITERATIONS"] = std::to_string(MaxConstraintIterations);
-    defines["CHORD_CONVERGED"] = mixedConstant(doublePrecision ? RigidBodyMath::ChordConvergence : SingleChordConvergence);
-    defines["CHORD_SWITCH"] = mixedConstant(RigidBodyMath::ChordSwitch);
-    defines["RIGID_TOLERANCE"] =
-        mixedConstant(doublePrecision ? RigidBodyMath::RigidVelocityTolerance : SingleRigidVelocityTolerance);
-    defines["COLLISION_THRESHOLD"] = mixedConstant(RigidBodyMath::CollisionThreshold);
-    return cc.compileProgram(CommonMRattleKernelSources::bodyMath + CommonMRattleKernelSources::rotation +
-                                 CommonMRattleKernelSources::step + CommonMRattleKernelSources::freeConstraints +
-                                 CommonMRattleKernelSources::projection + sources,
-                             defines);
-}
 
 void CommonRigidBodyDynamics::mapAtoms() {
     // cc.getAtomIndex()[i] is the System index of the atom the device holds at i.
@@ -201,129 +165,6 @@ void CommonRigidBodyDynamics::mapAtoms() {
     }
 }
 
-void CommonRigidBodyDynamics::addMixedArg(ComputeKernel& kernel, double value) const {
-    if (cc.getUseDoublePrecision() || cc.getUseMixedPrecision())
-        kernel->addArg(value);
-    else
-        kernel->addArg((float) value);
-}
-
-void CommonRigidBodyDynamics::setMixedArg(ComputeKernel& kernel, int index, double value) const {
-    if (cc.getUseDoublePrecision() || cc.getUseMixedPrecision())
-        kernel->setArg(index, value);
-    else
-        kernel->setArg(index, (float) value);
-}
-
-void CommonRigidBodyDynamics::setKernelArguments() {
-    IntegrationUtilities& integration = cc.getIntegrationUtilities();
-    ArrayInterface& posq = cc.getPosq();
-    // Only mixed precision has position corrections; the others pass posq in their place, unread.
-    ArrayInterface& correction = cc.getUseMixedPrecision() ? cc.getPosqCorrection() : cc.getPosq();
-    const int numAtoms = cc.getNumAtoms(), padded = cc.getPaddedNumAtoms();
-    const bool doubleMixed = cc.getUseDoublePrecision() || cc.getUseMixedPrecision();
-
-    CommonKernelArguments drift(kickAndDrift, doubleMixed);
-    drift.add(numAtoms);
-    drift.add(padded);
-    kickAndDriftKickTime = drift.addMixed(0.0);
-    kickAndDriftDriftTime = drift.addMixed(0.0);
-    drift.add(cc.getVelm());
-    drift.add(cc.getLongForceBuffer());
-    drift.add(integration.getPosDelta());
-    drift.add(newVelocity);
-    drift.add(stepFailure.flag());
-
-    CommonKernelArguments reset(resetBodies, doubleMixed);
-    reset.add(numBodies);
-    reset.add(bodyStart);
-    reset.add(bodyAtoms);
-    reset.add(bodyLinear);
-    resetBodiesDriftTime = reset.addMixed(0.0);
-    reset.add(posq);
-    reset.add(correction);
-    reset.add(integration.getPosDelta());
-    reset.add(newVelocity);
-    reset.add(stepFailure.flag());
-
-    CommonKernelArguments freePositions(constrainFreePositions, doubleMixed);
-    freePositions.add(numClusters);
-    freePositions.add(clusterStart);
-    freePositions.add(constraintAtoms);
-    freePositions.add(constraintDistance);
-    freePositionsDriftTime = freePositions.addMixed(0.0);
-    freePositions.add(posq);
-    freePositions.add(correction);
-    freePositions.add(integration.getPosDelta());
-    freePositions.add(newVelocity);
-    freePositionsTolerance = freePositions.addMixed(0.0);
-    freePositions.add(stepFailure.flag());
-
-    CommonKernelArguments apply(applyPositionStep, doubleMixed);
-    apply.add(numAtoms);
-    apply.add(posq);
-    apply.add(correction);
-    apply.add(cc.getVelm());
-    apply.add(integration.getPosDelta());
-    apply.add(newVelocity);
-    apply.add(stepFailure.flag());
-
-    CommonKernelArguments kicks(kickVelocities, doubleMixed);
-    kicks.add(numAtoms);
-    kicks.add(padded);
-    kickVelocitiesTime = kicks.addMixed(0.0);
-    kicks.add(cc.getVelm());
-    kicks.add(cc.getLongForceBuffer());
-    kicks.add(stepFailure.flag());
-
-    CommonKernelArguments projection(projectBodies, doubleMixed);
-    projection.add(numBodies);
-    projection.add(bodyStart);
-    projection.add(bodyAtoms);
-    projection.add(bodyLinear);
-    projection.add(posq);
-    projection.add(correction);
-    projection.add(cc.getVelm());
-    projectOnlyIfNotRigid = projection.add(0);
-    projection.add(stepFailure.flag());
-
-    CommonKernelArguments freeVelocities(constrainFreeVelocities, doubleMixed);
-    freeVelocities.add(numClusters);
-    freeVelocities.add(clusterStart);
-    freeVelocities.add(constraintAtoms);
-    freeVelocities.add(posq);
-    freeVelocities.add(correction);
-    freeVelocities.add(cc.getVelm());
-    freeVelocitiesTolerance = freeVelocities.addMixed(0.0);
-    freeVelocities.add(stepFailure.flag());
-
-    CommonKernelArguments backup(backupState, doubleMixed);
-    backup.add(numAtoms);
-    backup.add(posq);
-    backup.add(correction);
-    backup.add(cc.getVelm());
-    backup.add(stepFailure.posqBackup());
-    backup.add(stepFailure.correctionBackup());
-    backup.add(stepFailure.velmBackup());
-    backup.add(stepFailure.flag());
-    backupStepIndex = backup.add(0);
-
-    if (hasAndersen) {
-        CommonKernelArguments collide(collideBodies, doubleMixed);
-        collide.add(numBodies);
-        collide.add(bodyStart);
-        collide.add(bodyAtoms);
-        collide.add(bodyLinear);
-        collide.add(posq);
-        collide.add(correction);
-        collide.add(cc.getVelm());
-        collideKT = collide.addMixed(0.0);
-        collide.add(integration.getRandom());
-        collideRandomIndex = collide.add(0u);
-        collide.add(stepFailure.flag());
-    }
-    argumentsSet = true;
-}
 
 void CommonRigidBodyDynamics::beginStep(ContextImpl& context, const RigidBodyIntegrator& integrator,
                                         bool& forcesAreValid) {
@@ -439,11 +280,10 @@ void CommonRigidBodyDynamics::updateShapes(ContextImpl& context) {
         context.getPositions(positions);
     }
     shapes = HostRigidBodyRules::classifyShapes(bodies, positions);
-    // The device's shape codes (kernels/bodyMath.cc): 0 general, 1 linear, 2 a point (no rotation).
-    vector<int> flags(std::max(1, numBodies), 0);
+    vector<int> codes(std::max(1, numBodies), shapeCode(RigidBodyMath::Shape::General));
     for (int b = 0; b < numBodies; b++)
-        flags[b] = (shapes[b] == RigidBodyMath::Shape::General ? 0 : shapes[b] == RigidBodyMath::Shape::Linear ? 1 : 2);
-    bodyLinear.upload(flags);
+        codes[b] = shapeCode(shapes[b]);
+    bodyShape.upload(codes);
 }
 
 void CommonRigidBodyDynamics::projectVelocities(ContextImpl& context, double tolerance) {

@@ -13,10 +13,13 @@
  * before that step, whose index backupState keeps in failure[1].
  */
 
-/* A body's shape, as the host classifies it when positions are set (bodyLinear[body]). */
-#define SHAPE_GENERAL 0
-#define SHAPE_LINEAR 1
-#define SHAPE_POINT 2  /* only translates: no rotation is solved or kept */
+/*
+ * A body's shape, as the host classifies it when positions are set (bodyShape[body]):
+ * SHAPE_GENERAL, SHAPE_LINEAR or SHAPE_POINT (only translates: no rotation is solved or
+ * kept), defined by the host from RigidBodyMath::Shape. FINITE_BOUND, also the host's: a
+ * squared velocity, a squared centre or a rotation vector's length beyond it counts as not
+ * finite (NaN fails every comparison).
+ */
 
 typedef struct {
     mixed m00, m01, m02, m10, m11, m12, m20, m21, m22;
@@ -99,9 +102,9 @@ DEVICE Matrix3 inertiaOf(Matrix3 J, mixed traceJ) {
     return I;
 }
 
-/** A velocity whose square is finite and below 1e30 (NaN fails every comparison). */
+/** A velocity whose square is finite and within FINITE_BOUND (NaN fails every comparison). */
 DEVICE bool isFiniteVelocity(mixed4 v) {
-    return v.x*v.x + v.y*v.y + v.z*v.z <= 1e30f;
+    return v.x*v.x + v.y*v.y + v.z*v.z <= FINITE_BOUND;
 }
 
 /** Every work item of one launch that fails writes the same value, so no atomic is needed. */

@@ -35,7 +35,7 @@ KERNEL void kickAndDrift(int numAtoms, int paddedNumAtoms, mixed kickTime, mixed
  * atom so that a body far from the origin loses no digits.
  */
 KERNEL void resetBodies(int numBodies, GLOBAL const int* RESTRICT bodyStart, GLOBAL const int* RESTRICT bodyAtoms,
-        GLOBAL const int* RESTRICT bodyLinear, mixed h, GLOBAL const real4* RESTRICT posq,
+        GLOBAL const int* RESTRICT bodyShape, mixed h, GLOBAL const real4* RESTRICT posq,
         GLOBAL const real4* RESTRICT posqCorrection, GLOBAL mixed4* RESTRICT posDelta,
         GLOBAL mixed4* RESTRICT newVelocity, GLOBAL int* RESTRICT failure) {
     if (failure[0] != 0)
@@ -44,12 +44,12 @@ KERNEL void resetBodies(int numBodies, GLOBAL const int* RESTRICT bodyStart, GLO
         const int start = bodyStart[body], end = bodyStart[body+1];
         mixed3 origin, center, V;
         bodyCenterAndVelocity(start, end, bodyAtoms, posq, posqCorrection, newVelocity, &origin, &center, &V);
-        if (!(dot(V, V) <= 1e30f && dot(center, center) <= 1e30f)) {  // inf or NaN
+        if (!(dot(V, V) <= FINITE_BOUND && dot(center, center) <= FINITE_BOUND)) {  // inf or NaN
             recordFailure(failure);
             continue;
         }
         Matrix3 delta = zeroMatrix();
-        const bool converged = bodyLinear[body] == SHAPE_POINT || (bodyLinear[body] == SHAPE_GENERAL ?
+        const bool converged = bodyShape[body] == SHAPE_POINT || (bodyShape[body] == SHAPE_GENERAL ?
                 solveBodyRotation(start, end, bodyAtoms, posq, posqCorrection, newVelocity, origin, center, V, h,
                                   &delta) :
                 solveLinearBodyRotation(start, end, bodyAtoms, posq, posqCorrection, newVelocity, origin, center, V,
