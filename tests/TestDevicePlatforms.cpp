@@ -13,6 +13,7 @@
 #include <chrono>
 #include <cmath>
 #include <iostream>
+#include <limits>
 #include <sstream>
 
 using namespace OpenMM;
@@ -464,6 +465,73 @@ TEST_P(DevicePlatform, AFailureFoundAtAReorderingIsUndoneInTheNewOrder) {
     EXPECT_EQ(254, state.getStepCount());
     const Vec3 bond = state.getPositions()[1] - state.getPositions()[0];
     EXPECT_LT(std::fabs(std::sqrt(bond.dot(bond)) - 0.1), 1e-6);
+}
+
+TEST_P(DevicePlatform, ABodyOfTwoMoleculesAcrossTheBoxEdgeStaysWholeThroughReorderings) {
+    // Two waters declared as one body with nothing joining them (two molecules for OpenMM),
+    // straddling the x edge of a periodic box with a cutoff: OpenMM's reorderings (the first
+    // at the first step, then every 250 steps) wrap each molecule on its own unless it knows
+    // the body (CommonBodyForceInfo). Before, the body was torn by a box length.
+    const Molecule w = water();
+    System system;
+    system.setDefaultPeriodicBoxVectors(Vec3(2, 0, 0), Vec3(0, 2, 0), Vec3(0, 0, 2));
+    NonbondedForce* cutoff = new NonbondedForce();
+    cutoff->setNonbondedMethod(NonbondedForce::CutoffPeriodic);
+    cutoff->setCutoffDistance(0.9);
+    vector<Vec3> positions;
+    vector<int> body;
+    for (int copy = 0; copy < 2; copy++)
+        for (size_t k = 0; k < w.sites.size(); k++) {
+            body.push_back(system.addParticle(w.masses[k]));
+            cutoff->addParticle(0, 0.1, 0);
+            positions.push_back(w.sites[k] + Vec3(copy == 0 ? 1.93 : 2.07, 1, 1));
+        }
+    system.addForce(cutoff);
+    MRattleIntegrator integrator(0.002);
+    integrator.addRigidBody(body);
+    std::unique_ptr<Context> context = deviceContext(GetParam(), system, integrator, "double");
+    context->setPositions(positions);
+    context->setVelocitiesToTemperature(300, 5);
+    const vector<Vec3> start = context->getState(State::Positions).getPositions();
+    double largest = 0;
+    for (int block = 0; block < 4; block++) {
+        integrator.step(260);  // past a reordering each time
+        largest = std::max(largest, maxDistanceChange(start, context->getState(State::Positions).getPositions(), {body}));
+    }
+    std::cout << "a body of two waters across the box edge, 1,040 steps, " << GetParam()
+              << " (double): intra-body distances changed by " << largest << " nm" << std::endl;
+    EXPECT_LT(largest, 1e-10);
+}
+
+TEST_P(DevicePlatform, AnInfiniteForceIsFoundByTheSpeedItGives) {
+    // OpenMM sums device forces in fixed point: an infinite force arrives as about 2e9
+    // kJ/mol/nm, which the step sees as a speed beyond CommonStepFailure::LargestSpeed. (A
+    // NaN force arrives as that too on x86, as through pocl, but as 0 on CUDA: not tested.)
+    System system;
+    for (double m : {16.0, 1.0, 1.0})
+        system.addParticle(m);
+    CustomExternalForce* push = new CustomExternalForce("k*x");
+    push->addGlobalParameter("k", 0.0);
+    for (int i = 0; i < 3; i++)
+        push->addParticle(i, {});
+    system.addForce(push);
+    MRattleIntegrator integrator(0.002);
+    integrator.addRigidBody({0, 1, 2});
+    std::unique_ptr<Context> context = deviceContext(GetParam(), system, integrator, "double");
+    context->setPositions({Vec3(0, 0, 0), Vec3(0.1, 0, 0), Vec3(0, 0.1, 0)});
+    context->setVelocities({Vec3(1, 0, 0), Vec3(1, 0, 0), Vec3(1, 0, 0)});
+    integrator.step(3);
+    const State before = context->getState(State::Positions | State::Velocities);
+    context->setParameter("k", std::numeric_limits<double>::infinity());
+    const string message = messageOf([&] { integrator.step(5); });
+    EXPECT_NE(string::npos, message.find("not finite")) << message;
+    const State after = context->getState(State::Positions | State::Velocities);
+    EXPECT_EQ(before.getStepCount(), after.getStepCount());
+    EXPECT_EQ(0.0, maxDeviation(before.getPositions(), after.getPositions()));
+    EXPECT_EQ(0.0, maxDeviation(before.getVelocities(), after.getVelocities()));
+    context->setParameter("k", 0.0);
+    integrator.step(2);
+    EXPECT_EQ(before.getStepCount() + 2, context->getState(State::Positions).getStepCount());
 }
 
 INSTANTIATE_TEST_SUITE_P(Devices, DevicePlatform, ::testing::ValuesIn(builtDevicePlatforms()),

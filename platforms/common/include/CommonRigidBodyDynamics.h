@@ -52,6 +52,8 @@ public:
     /** Add or set a kernel argument in the precision of the integration arithmetic ('mixed'). */
     void addMixedArg(OpenMM::ComputeKernel& kernel, double value) const;
     void setMixedArg(OpenMM::ComputeKernel& kernel, int index, double value) const;
+    /** Start OpenMM's device random numbers (before the first step): the passes' noise draws from them. */
+    void initRandomNumbers(int seed);
     /** Whether the System has an AndersenThermostat (its seed then seeds OpenMM's device random numbers). */
     bool hasAndersenThermostat() const {
         return hasAndersen;
@@ -67,11 +69,33 @@ public:
      * positions and atom order.
      */
     void beginStep(OpenMM::ContextImpl& context, const RigidBodyIntegrator& integrator, bool& forcesAreValid);
-    /** A kick over kickTime (0: none), a drift over h, the bodies' resets and the free constraints. */
+    /**
+     * The phases of one fused pass over the groups of atoms that move together (a body, a
+     * cluster of free constraints, a free atom), in this order, each if asked for: a kick
+     * over kickTime with the Context's forces; RATTLE's velocity step; a drift over
+     * driftTime with the bodies' resets and SHAKE; Langevin noise (v = a v + noiseScale
+     * sqrt(1/m) g, a = noiseDecay) followed by the velocity step; the velocity step.
+     */
+    struct Pass {
+        double kickTime = 0;
+        bool projectAfterKick = false;
+        double driftTime = 0;
+        double noiseDecay = 1, noiseScale = 0;
+        bool projectAtEnd = false;
+    };
+    /**
+     * One launch of the device (kernels/advance.cc); the step's first pass also backs up the
+     * state. Free constraints converge to the tolerance of the step (beginStep).
+     */
+    void advance(const Pass& pass);
+    /** A kick over kickTime (0: none), a drift over h, the bodies' resets and the free constraints: one pass. */
     void driftAndReset(double kickTime, double h, double tolerance);
-    /** A kick of the Context's velocities over this time with its forces. */
+    /** A kick of the Context's velocities over this time with its forces: one pass. */
     void kick(double time);
-    /** RATTLE's velocity step: bodies onto rigid-body motion (only those not rigid, if asked), free constraints. */
+    /**
+     * RATTLE's velocity step: bodies onto rigid-body motion (only those not rigid, if asked),
+     * free constraints (outside a step's passes: velocities set from the host, collisions).
+     */
     void project(double tolerance, bool onlyIfNotRigid);
     /** Virtual sites at the new positions, then the forces there. */
     void computeForces(OpenMM::ContextImpl& context, const RigidBodyIntegrator& integrator, bool& forcesAreValid);
@@ -114,26 +138,30 @@ private:
     /** Mutable: a checkpoint (const) is written only after the unchecked steps are checked. */
     mutable CommonStepFailure stepFailure;
     RigidBodyTopology bodies;
-    std::vector<int> systemBodyAtoms, systemConstraintAtoms;  // System atom indices, body-major / cluster-major
+    // System atom indices: body-major, cluster-major (constraint ends; each atom once), the rest.
+    std::vector<int> systemBodyAtoms, systemConstraintAtoms, systemClusterAtoms, systemFreeAtoms;
     std::vector<RigidBodyMath::Shape> shapes;
     std::vector<double> inverseMasses;
     std::unique_ptr<BodyShapeConstraints> shapeConstraints;
     std::unique_ptr<CommonBodyKineticEnergy> bodyKineticEnergy;  // reads bodyStart and bodyAtoms
-    int numBodies = 0, numClusters = 0;
-    bool hasAndersen = false, argumentsSet = false;
+    int numBodies = 0, numClusters = 0, numFree = 0;
+    /** The step's index for the failure flag until its first pass has backed up the state, then -1. */
+    int backupStepIndex = -1;
+    /** The free constraints' tolerance in this step's passes. */
+    double tolerance = 1e-5;
+    bool hasAndersen = false, hasRandomNumbers = false, argumentsSet = false;
     /** Set by OpenMM's reorder of atoms: the force buffer then belongs to the old order. */
     bool atomsReordered = false;
     /** Set while updateShapes() writes corrected positions: the Context notifies the integrator again. */
     bool writingCorrectedShapes = false;
     OpenMM::ComputeProgram program;
     OpenMM::ComputeArray bodyStart, bodyAtoms, bodyShape, clusterStart, constraintAtoms, constraintDistance;
-    OpenMM::ComputeArray newVelocity;
-    OpenMM::ComputeKernel kickAndDrift, resetBodies, constrainFreePositions, applyPositionStep, kickVelocities,
-        projectBodies, constrainFreeVelocities, collideBodies, backupState;
+    OpenMM::ComputeArray clusterAtomStart, clusterAtoms, freeAtoms;
+    OpenMM::ComputeKernel advanceGroups, projectBodies, constrainFreeVelocities, collideBodies;
     // Indices of the arguments set at each launch.
-    int kickAndDriftKickTime, kickAndDriftDriftTime, resetBodiesDriftTime, freePositionsDriftTime,
-        freePositionsTolerance, kickVelocitiesTime, projectOnlyIfNotRigid, freeVelocitiesTolerance, collideKT,
-        collideRandomIndex, backupStepIndex;
+    int advanceBackupIndex, advanceKickTime, advanceProjectAfterKick, advanceDriftTime, advanceTolerance,
+        advanceNoiseDecay, advanceNoiseScale, advanceRandomIndex, advanceProjectAtEnd, projectOnlyIfNotRigid,
+        freeVelocitiesTolerance, collideKT, collideRandomIndex;
 };
 
 } // namespace MRattlePlugin

@@ -33,6 +33,14 @@ namespace MRattlePlugin {
  */
 class CommonStepFailure {
 public:
+    /**
+     * A speed (nm/ps) no atom reaches in a simulation that is right (3% of light's; a
+     * hydrogen at 10^6 K moves at about 160 nm/ps): beyond it a kicked velocity counts as not
+     * finite, which is how the device sees a force that is not finite (OpenMM's fixed-point
+     * forces turn infinity into about 2e9 kJ/mol/nm; NaN into that too on x86, as through
+     * pocl, but into 0 on CUDA, where it cannot be seen).
+     */
+    static constexpr double LargestSpeed = 1e4;
     CommonStepFailure(OpenMM::ComputeContext& cc, const std::string& integratorName);
     /** Allocate the flag and the backups (OpenMM's arrays must exist). */
     void initialize();

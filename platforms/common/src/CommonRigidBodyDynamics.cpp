@@ -1,4 +1,5 @@
 #include "CommonRigidBodyDynamics.h"
+#include "CommonBodyForceInfo.h"
 #include "CommonMRattleKernelSources.h"
 #include "HostRigidBodyRules.h"
 #include "RigidBodyIntegrator.h"
@@ -73,6 +74,8 @@ CommonRigidBodyDynamics::~CommonRigidBodyDynamics() {
 }
 
 void CommonRigidBodyDynamics::initialize(const System& system, const RigidBodyTopology& topology) {
+    // Whole bodies across reorderings: OpenMM builds its molecules once, when it initializes.
+    cc.addForce(new CommonBodyForceInfo(topology.getBodies()));
     cc.initializeContexts();
     bodies = topology;
     numBodies = bodies.getNumBodies();
@@ -88,7 +91,10 @@ void CommonRigidBodyDynamics::initialize(const System& system, const RigidBodyTo
         starts.push_back(systemBodyAtoms.size());
     }
     vector<double> distances;
-    vector<int> clusterStarts = {0};
+    vector<int> clusterStarts = {0}, clusterAtomStarts = {0};
+    vector<bool> grouped(system.getNumParticles(), false);
+    for (int atom : systemBodyAtoms)
+        grouped[atom] = true;
     for (const vector<int>& cluster : constraintClusters(system, bodies.getFreeConstraints())) {
         for (int c : cluster) {
             int p1, p2;
@@ -97,13 +103,23 @@ void CommonRigidBodyDynamics::initialize(const System& system, const RigidBodyTo
             systemConstraintAtoms.push_back(p1);
             systemConstraintAtoms.push_back(p2);
             distances.push_back(distance);
+            for (int atom : {p1, p2})
+                if (!grouped[atom]) {
+                    grouped[atom] = true;
+                    systemClusterAtoms.push_back(atom);
+                }
         }
         clusterStarts.push_back(distances.size());
+        clusterAtomStarts.push_back(systemClusterAtoms.size());
     }
     numClusters = clusterStarts.size() - 1;
+    // Every other particle moves alone (massless ones too: the step's backup holds them).
+    for (int atom = 0; atom < system.getNumParticles(); atom++)
+        if (!grouped[atom])
+            systemFreeAtoms.push_back(atom);
+    numFree = systemFreeAtoms.size();
     const bool doubleMixed = cc.getUseDoublePrecision() || cc.getUseMixedPrecision();
     const int mixedSize = doubleMixed ? sizeof(double) : sizeof(float);
-    const int vectorSize = doubleMixed ? sizeof(mm_double4) : sizeof(mm_float4);
     bodyStart.initialize<int>(cc, starts.size(), "mrattleBodyStart");
     bodyStart.upload(starts);
     bodyAtoms.initialize<int>(cc, std::max<size_t>(1, systemBodyAtoms.size()), "mrattleBodyAtoms");
@@ -115,7 +131,10 @@ void CommonRigidBodyDynamics::initialize(const System& system, const RigidBodyTo
     constraintDistance.initialize(cc, std::max<size_t>(1, distances.size()), mixedSize, "mrattleConstraintDistance");
     if (!distances.empty())
         constraintDistance.upload(distances, true);
-    newVelocity.initialize(cc, cc.getPaddedNumAtoms(), vectorSize, "mrattleNewVelocity");
+    clusterAtomStart.initialize<int>(cc, clusterAtomStarts.size(), "mrattleClusterAtomStart");
+    clusterAtomStart.upload(clusterAtomStarts);
+    clusterAtoms.initialize<int>(cc, std::max<size_t>(1, systemClusterAtoms.size()), "mrattleClusterAtoms");
+    freeAtoms.initialize<int>(cc, std::max<size_t>(1, systemFreeAtoms.size()), "mrattleFreeAtoms");
     stepFailure.initialize();
     mapAtoms();
     cc.addReorderListener(new ReorderListener(*this));
@@ -123,21 +142,21 @@ void CommonRigidBodyDynamics::initialize(const System& system, const RigidBodyTo
     for (int f = 0; f < system.getNumForces(); f++)
         if (const AndersenThermostat* thermostat = dynamic_cast<const AndersenThermostat*>(&system.getForce(f))) {
             hasAndersen = true;
-            cc.getIntegrationUtilities().initRandomNumberGenerator(thermostat->getRandomNumberSeed());
+            initRandomNumbers(thermostat->getRandomNumberSeed());
         }
     program = compileWith(hasAndersen ? CommonMRattleKernelSources::collisions : "");
-    kickAndDrift = program->createKernel("kickAndDrift");
-    resetBodies = program->createKernel("resetBodies");
-    constrainFreePositions = program->createKernel("constrainFreePositions");
-    applyPositionStep = program->createKernel("applyPositionStep");
-    kickVelocities = program->createKernel("kickVelocities");
+    advanceGroups = program->createKernel("advanceGroups");
     projectBodies = program->createKernel("projectBodies");
     constrainFreeVelocities = program->createKernel("constrainFreeVelocities");
-    backupState = program->createKernel("backupState");
     if (hasAndersen)
         collideBodies = program->createKernel("collideBodies");
 }
 
+
+void CommonRigidBodyDynamics::initRandomNumbers(int seed) {
+    cc.getIntegrationUtilities().initRandomNumberGenerator(seed);
+    hasRandomNumbers = true;
+}
 
 void CommonRigidBodyDynamics::mapAtoms() {
     // cc.getAtomIndex()[i] is the System index of the atom the device holds at i.
@@ -151,12 +170,17 @@ void CommonRigidBodyDynamics::mapAtoms() {
             return;
         deviceIndex[order[i]] = i;
     }
-    if (!systemBodyAtoms.empty()) {
-        vector<int> atoms(systemBodyAtoms.size());
+    auto upload = [&](const vector<int>& systemAtoms, ComputeArray& array) {
+        if (systemAtoms.empty())
+            return;
+        vector<int> atoms(systemAtoms.size());
         for (size_t k = 0; k < atoms.size(); k++)
-            atoms[k] = deviceIndex[systemBodyAtoms[k]];
-        bodyAtoms.upload(atoms);
-    }
+            atoms[k] = deviceIndex[systemAtoms[k]];
+        array.upload(atoms);
+    };
+    upload(systemBodyAtoms, bodyAtoms);
+    upload(systemClusterAtoms, clusterAtoms);
+    upload(systemFreeAtoms, freeAtoms);
     if (!systemConstraintAtoms.empty()) {
         vector<mm_int2> atoms(systemConstraintAtoms.size() / 2);
         for (size_t k = 0; k < atoms.size(); k++)
@@ -171,8 +195,6 @@ void CommonRigidBodyDynamics::beginStep(ContextImpl& context, const RigidBodyInt
     if (!argumentsSet)
         setKernelArguments();
     cc.getIntegrationUtilities().setNextStepSize(integrator.getStepSize());
-    backupState->setArg(backupStepIndex, stepFailure.stepStarted(context, integrator.getStepSize()));
-    backupState->execute(cc.getNumAtoms());
     if (hasAndersen && numBodies > 0) {
         // The thermostat (updateContextState) re-drew single atoms: re-draw their whole bodies.
         IntegrationUtilities& integration = cc.getIntegrationUtilities();
@@ -181,6 +203,10 @@ void CommonRigidBodyDynamics::beginStep(ContextImpl& context, const RigidBodyInt
         collideBodies->execute(numBodies);
         project(integrator.getConstraintTolerance(), true);
     }
+    // The step's first pass backs up the state (after the collisions: their velocities are
+    // the step's start), with the step's index for the failure flag.
+    backupStepIndex = stepFailure.stepStarted(context, integrator.getStepSize());
+    tolerance = integrator.getConstraintTolerance();
     if (atomsReordered)
         forcesAreValid = false;  // computed for the atoms' old order
     atomsReordered = false;
@@ -188,30 +214,50 @@ void CommonRigidBodyDynamics::beginStep(ContextImpl& context, const RigidBodyInt
         context.calcForcesAndEnergy(true, false, integrator.getIntegrationForceGroups());
 }
 
+void CommonRigidBodyDynamics::advance(const Pass& pass) {
+    if (!argumentsSet)
+        setKernelArguments();
+    const int numGroups = numBodies + numClusters + numFree;
+    advanceGroups->setArg(advanceBackupIndex, backupStepIndex);
+    setMixedArg(advanceGroups, advanceKickTime, pass.kickTime);
+    advanceGroups->setArg(advanceProjectAfterKick, pass.projectAfterKick ? 1 : 0);
+    setMixedArg(advanceGroups, advanceDriftTime, pass.driftTime);
+    setMixedArg(advanceGroups, advanceTolerance, tolerance);
+    setMixedArg(advanceGroups, advanceNoiseDecay, pass.noiseDecay);
+    setMixedArg(advanceGroups, advanceNoiseScale, pass.noiseScale);
+    if (pass.noiseScale != 0)
+        advanceGroups->setArg(advanceRandomIndex,
+                              (unsigned int) cc.getIntegrationUtilities().prepareRandomNumbers(cc.getPaddedNumAtoms()));
+    advanceGroups->setArg(advanceProjectAtEnd, pass.projectAtEnd ? 1 : 0);
+    if (numGroups > 0)
+        advanceGroups->execute(numGroups);
+    backupStepIndex = -1;  // once per step
+}
+
 void CommonRigidBodyDynamics::driftAndReset(double kickTime, double h, double tolerance) {
-    setMixedArg(kickAndDrift, kickAndDriftKickTime, kickTime);
-    setMixedArg(kickAndDrift, kickAndDriftDriftTime, h);
-    kickAndDrift->execute(cc.getNumAtoms());
-    if (numBodies > 0) {
-        setMixedArg(resetBodies, resetBodiesDriftTime, h);
-        resetBodies->execute(numBodies);
-    }
-    if (numClusters > 0) {
-        setMixedArg(constrainFreePositions, freePositionsDriftTime, h);
-        setMixedArg(constrainFreePositions, freePositionsTolerance, tolerance);
-        constrainFreePositions->execute(numClusters);
-    }
-    applyPositionStep->execute(cc.getNumAtoms());
+    this->tolerance = tolerance;
+    Pass pass;
+    pass.kickTime = kickTime;
+    pass.driftTime = h;
+    advance(pass);
 }
 
 void CommonRigidBodyDynamics::kick(double time) {
-    setMixedArg(kickVelocities, kickVelocitiesTime, time);
-    kickVelocities->execute(cc.getNumAtoms());
+    Pass pass;
+    pass.kickTime = time;
+    advance(pass);
 }
 
 void CommonRigidBodyDynamics::project(double tolerance, bool onlyIfNotRigid) {
     if (!argumentsSet)
         setKernelArguments();
+    if (backupStepIndex >= 0 && !onlyIfNotRigid) {
+        this->tolerance = tolerance;
+        Pass pass;  // the step's first pass: it backs up the state
+        pass.projectAtEnd = true;
+        advance(pass);
+        return;
+    }
     if (numBodies > 0) {
         projectBodies->setArg(projectOnlyIfNotRigid, onlyIfNotRigid ? 1 : 0);
         projectBodies->execute(numBodies);

@@ -55,12 +55,13 @@ ComputeProgram CommonRigidBodyDynamics::compileWith(const std::string& sources) 
         mixedConstant(doublePrecision ? RigidBodyMath::RigidVelocityTolerance : SingleRigidVelocityTolerance);
     defines["COLLISION_THRESHOLD"] = mixedConstant(RigidBodyMath::CollisionThreshold);
     defines["FINITE_BOUND"] = mixedConstant(DeviceFiniteBound);
+    defines["LARGEST_SPEED"] = mixedConstant(CommonStepFailure::LargestSpeed);
     defines["SHAPE_GENERAL"] = std::to_string(shapeCode(RigidBodyMath::Shape::General));
     defines["SHAPE_LINEAR"] = std::to_string(shapeCode(RigidBodyMath::Shape::Linear));
     defines["SHAPE_POINT"] = std::to_string(shapeCode(RigidBodyMath::Shape::Point));
     return cc.compileProgram(CommonMRattleKernelSources::bodyMath + CommonMRattleKernelSources::rotation +
                                  CommonMRattleKernelSources::step + CommonMRattleKernelSources::freeConstraints +
-                                 CommonMRattleKernelSources::projection + sources,
+                                 CommonMRattleKernelSources::projection + CommonMRattleKernelSources::advance + sources,
                              defines);
 }
 
@@ -83,61 +84,46 @@ void CommonRigidBodyDynamics::setKernelArguments() {
     ArrayInterface& posq = cc.getPosq();
     // Only mixed precision has position corrections; the others pass posq in their place, unread.
     ArrayInterface& correction = cc.getUseMixedPrecision() ? cc.getPosqCorrection() : cc.getPosq();
-    const int numAtoms = cc.getNumAtoms(), padded = cc.getPaddedNumAtoms();
+    const int padded = cc.getPaddedNumAtoms();
     const bool doubleMixed = cc.getUseDoublePrecision() || cc.getUseMixedPrecision();
 
-    CommonKernelArguments drift(kickAndDrift, doubleMixed);
-    drift.add(numAtoms);
-    drift.add(padded);
-    kickAndDriftKickTime = drift.addMixed(0.0);
-    kickAndDriftDriftTime = drift.addMixed(0.0);
-    drift.add(cc.getVelm());
-    drift.add(cc.getLongForceBuffer());
-    drift.add(integration.getPosDelta());
-    drift.add(newVelocity);
-    drift.add(stepFailure.flag());
-
-    CommonKernelArguments reset(resetBodies, doubleMixed);
-    reset.add(numBodies);
-    reset.add(bodyStart);
-    reset.add(bodyAtoms);
-    reset.add(bodyShape);
-    resetBodiesDriftTime = reset.addMixed(0.0);
-    reset.add(posq);
-    reset.add(correction);
-    reset.add(integration.getPosDelta());
-    reset.add(newVelocity);
-    reset.add(stepFailure.flag());
-
-    CommonKernelArguments freePositions(constrainFreePositions, doubleMixed);
-    freePositions.add(numClusters);
-    freePositions.add(clusterStart);
-    freePositions.add(constraintAtoms);
-    freePositions.add(constraintDistance);
-    freePositionsDriftTime = freePositions.addMixed(0.0);
-    freePositions.add(posq);
-    freePositions.add(correction);
-    freePositions.add(integration.getPosDelta());
-    freePositions.add(newVelocity);
-    freePositionsTolerance = freePositions.addMixed(0.0);
-    freePositions.add(stepFailure.flag());
-
-    CommonKernelArguments apply(applyPositionStep, doubleMixed);
-    apply.add(numAtoms);
-    apply.add(posq);
-    apply.add(correction);
-    apply.add(cc.getVelm());
-    apply.add(integration.getPosDelta());
-    apply.add(newVelocity);
-    apply.add(stepFailure.flag());
-
-    CommonKernelArguments kicks(kickVelocities, doubleMixed);
-    kicks.add(numAtoms);
-    kicks.add(padded);
-    kickVelocitiesTime = kicks.addMixed(0.0);
-    kicks.add(cc.getVelm());
-    kicks.add(cc.getLongForceBuffer());
-    kicks.add(stepFailure.flag());
+    CommonKernelArguments advance(advanceGroups, doubleMixed);
+    advance.add(numBodies);
+    advance.add(numClusters);
+    advance.add(numFree);
+    advance.add(bodyStart);
+    advance.add(bodyAtoms);
+    advance.add(bodyShape);
+    advance.add(clusterStart);
+    advance.add(constraintAtoms);
+    advance.add(constraintDistance);
+    advance.add(clusterAtomStart);
+    advance.add(clusterAtoms);
+    advance.add(freeAtoms);
+    advance.add(posq);
+    advance.add(correction);
+    advance.add(cc.getVelm());
+    advance.add(cc.getLongForceBuffer());
+    advance.add(padded);
+    advance.add(integration.getPosDelta());
+    advance.add(stepFailure.posqBackup());
+    advance.add(stepFailure.correctionBackup());
+    advance.add(stepFailure.velmBackup());
+    advanceBackupIndex = advance.add(-1);
+    advanceKickTime = advance.addMixed(0.0);
+    advanceProjectAfterKick = advance.add(0);
+    advanceDriftTime = advance.addMixed(0.0);
+    advanceTolerance = advance.addMixed(0.0);
+    advanceNoiseDecay = advance.addMixed(1.0);
+    advanceNoiseScale = advance.addMixed(0.0);
+    // OpenMM's device random numbers where a thermostat made them; else any float4-sized array, unread.
+    if (hasRandomNumbers)
+        advance.add(integration.getRandom());
+    else
+        advance.add(stepFailure.velmBackup());
+    advanceRandomIndex = advance.add(0u);
+    advanceProjectAtEnd = advance.add(0);
+    advance.add(stepFailure.flag());
 
     CommonKernelArguments projection(projectBodies, doubleMixed);
     projection.add(numBodies);
@@ -159,17 +145,6 @@ void CommonRigidBodyDynamics::setKernelArguments() {
     freeVelocities.add(cc.getVelm());
     freeVelocitiesTolerance = freeVelocities.addMixed(0.0);
     freeVelocities.add(stepFailure.flag());
-
-    CommonKernelArguments backup(backupState, doubleMixed);
-    backup.add(numAtoms);
-    backup.add(posq);
-    backup.add(correction);
-    backup.add(cc.getVelm());
-    backup.add(stepFailure.posqBackup());
-    backup.add(stepFailure.correctionBackup());
-    backup.add(stepFailure.velmBackup());
-    backup.add(stepFailure.flag());
-    backupStepIndex = backup.add(0);
 
     if (hasAndersen) {
         CommonKernelArguments collide(collideBodies, doubleMixed);

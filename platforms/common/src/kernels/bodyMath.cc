@@ -102,9 +102,13 @@ DEVICE Matrix3 inertiaOf(Matrix3 J, mixed traceJ) {
     return I;
 }
 
-/** A velocity whose square is finite and within FINITE_BOUND (NaN fails every comparison). */
+/**
+ * A velocity that is finite and below LARGEST_SPEED (NaN fails every comparison): OpenMM
+ * sums device forces in fixed point, where an infinite force becomes the largest number it
+ * holds (about 2e9 kJ/mol/nm), which kicks any atom far beyond that speed.
+ */
 DEVICE bool isFiniteVelocity(mixed4 v) {
-    return v.x*v.x + v.y*v.y + v.z*v.z <= FINITE_BOUND;
+    return v.x*v.x + v.y*v.y + v.z*v.z <= LARGEST_SPEED*LARGEST_SPEED;
 }
 
 /** Every work item of one launch that fails writes the same value, so no atomic is needed. */

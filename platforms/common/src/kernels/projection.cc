@@ -63,27 +63,32 @@ DEVICE RigidMotion rigidMotion(int start, int end, GLOBAL const int* RESTRICT bo
 }
 
 /**
- * Replace every body's velocities by their rigid-body projection. With onlyIfNotRigid,
+ * Replace one body's velocities by their rigid-body projection. With onlyIfNotRigid,
  * velocities already rigid to round-off (RIGID_TOLERANCE) are left exactly as they are.
  */
+DEVICE void projectBody(int start, int end, GLOBAL const int* RESTRICT bodyAtoms, int shape,
+        GLOBAL const real4* RESTRICT posq, GLOBAL const real4* RESTRICT posqCorrection, GLOBAL mixed4* RESTRICT velm,
+        bool onlyIfNotRigid) {
+    mixed residual, scale;
+    const RigidMotion motion = rigidMotion(start, end, bodyAtoms, shape, posq, posqCorrection, velm, &residual, &scale);
+    if (onlyIfNotRigid && residual <= RIGID_TOLERANCE*RIGID_TOLERANCE*scale)
+        return;
+    for (int k = start; k < end; k++) {
+        const int atom = bodyAtoms[k];
+        const mixed4 v = velm[atom];
+        const mixed3 rigid = motion.V + cross(motion.omega, loadPosition(posq, posqCorrection, atom) - motion.origin - motion.center);
+        velm[atom] = make_mixed4(rigid.x, rigid.y, rigid.z, v.w);
+    }
+}
+
+/** Every body's projection (velocities set from the host, Andersen collisions). */
 KERNEL void projectBodies(int numBodies, GLOBAL const int* RESTRICT bodyStart, GLOBAL const int* RESTRICT bodyAtoms,
         GLOBAL const int* RESTRICT bodyShape, GLOBAL const real4* RESTRICT posq,
         GLOBAL const real4* RESTRICT posqCorrection, GLOBAL mixed4* RESTRICT velm, int onlyIfNotRigid,
         GLOBAL const int* RESTRICT failure) {
     if (failure[0] != 0)
         return;
-    for (int body = GLOBAL_ID; body < numBodies; body += GLOBAL_SIZE) {
-        const int start = bodyStart[body], end = bodyStart[body+1];
-        mixed residual, scale;
-        const RigidMotion motion = rigidMotion(start, end, bodyAtoms, bodyShape[body], posq, posqCorrection, velm,
-                                               &residual, &scale);
-        if (onlyIfNotRigid && residual <= RIGID_TOLERANCE*RIGID_TOLERANCE*scale)
-            continue;
-        for (int k = start; k < end; k++) {
-            const int atom = bodyAtoms[k];
-            const mixed4 v = velm[atom];
-            const mixed3 rigid = motion.V + cross(motion.omega, loadPosition(posq, posqCorrection, atom) - motion.origin - motion.center);
-            velm[atom] = make_mixed4(rigid.x, rigid.y, rigid.z, v.w);
-        }
-    }
+    for (int body = GLOBAL_ID; body < numBodies; body += GLOBAL_SIZE)
+        projectBody(bodyStart[body], bodyStart[body+1], bodyAtoms, bodyShape[body], posq, posqCorrection, velm,
+                    onlyIfNotRigid != 0);
 }
