@@ -534,6 +534,105 @@ TEST_P(DevicePlatform, AnInfiniteForceIsFoundByTheSpeedItGives) {
     EXPECT_EQ(before.getStepCount() + 2, context->getState(State::Positions).getStepCount());
 }
 
+namespace {
+
+/** The largest |O-H - 0.09572| over waters whose atoms are 3w, 3w+1, 3w+2 (O, H, H). */
+double largestOHError(const vector<Vec3>& x) {
+    double largest = 0;
+    for (size_t w = 0; w + 2 < x.size(); w += 3)
+        for (int h = 1; h <= 2; h++) {
+            const Vec3 d = x[w + h] - x[w];
+            largest = std::max(largest, std::fabs(std::sqrt(d.dot(d)) - 0.09572));
+        }
+    return largest;
+}
+
+} // namespace
+
+TEST_P(DevicePlatform, WaterShapesStayExactFarFromTheOriginLikeSettle) {
+    // 27 rigid TIP3P waters (constrained as OpenMM's rigid water is) 30 nm from the origin,
+    // no forces, 50,000 steps of 2 fs: each step rebuilds a body from its reference geometry
+    // (CommonRigidBodyDynamics::setReference), so the O-H error stays at the storage's
+    // round-off as SETTLE's does instead of random-walking (before: 300x SETTLE's in single
+    // precision after 10,000 steps). The yardstick: OpenMM's Verlet with SETTLE, same run.
+    const double OH = 0.09572, HH = 2 * OH * std::sin(104.52 * M_PI / 360);
+    System system;
+    vector<Vec3> positions;
+    for (int w = 0; w < 27; w++) {
+        const int o = system.addParticle(15.9994), h1 = system.addParticle(1.008), h2 = system.addParticle(1.008);
+        system.addConstraint(o, h1, OH);
+        system.addConstraint(o, h2, OH);
+        system.addConstraint(h1, h2, HH);
+        const vector<Vec3> rotation = randomRotation(100 + w);
+        const Vec3 center(30 + 0.4 * (w % 3), 30 + 0.4 * ((w / 3) % 3), 30 + 0.4 * (w / 9));
+        positions.push_back(center);
+        positions.push_back(center + rotate(rotation, Vec3(OH, 0, 0)));
+        positions.push_back(center + rotate(rotation, Vec3(OH * std::cos(104.52 * M_PI / 180), OH * std::sin(104.52 * M_PI / 180), 0)));
+    }
+    for (const string precision : {"single", "mixed"}) {
+        double errors[2];
+        for (int run = 0; run < 2; run++) {
+            std::unique_ptr<Integrator> integrator(run == 0 ? (Integrator*) new VerletIntegrator(0.002)
+                                                            : (Integrator*) new MRattleIntegrator(0.002));
+            std::unique_ptr<Context> context = deviceContext(GetParam(), system, *integrator, precision);
+            context->setPositions(positions);
+            context->setVelocitiesToTemperature(300, 9);
+            errors[run] = 0;
+            for (int block = 0; block < 10; block++) {
+                integrator->step(5000);
+                errors[run] = std::max(errors[run], largestOHError(context->getState(State::Positions).getPositions()));
+            }
+        }
+        std::cout << "27 waters 30 nm from the origin, 50,000 steps of 2 fs, " << GetParam() << " " << precision
+                  << ": largest O-H error (every 5,000 steps) Verlet+SETTLE " << errors[0] << " nm, M-RATTLE "
+                  << errors[1] << " nm" << std::endl;
+        EXPECT_GT(errors[0], 0.0) << precision;
+        EXPECT_LE(errors[1], std::max(2 * errors[0], 1e-8)) << precision;
+    }
+}
+
+TEST_P(DevicePlatform, ARigidIdealGasUnderABarostatKeepsItsBodiesInMixedPrecision) {
+    // OpenMM's testIdealGas in rigid form: 64 rigid dimers (a zero-force bond makes each one
+    // molecule for the barostat), no interactions, 600 K, a MonteCarloBarostat at 1 bar,
+    // 20,000 steps of 10 fs in mixed precision. The bodies keep their shape within 1e-6 nm
+    // (before the reference geometry: 9.6e-5 nm on OpenCL, issue 31).
+    System system;
+    system.setDefaultPeriodicBoxVectors(Vec3(4, 0, 0), Vec3(0, 4, 0), Vec3(0, 0, 4));
+    HarmonicBondForce* bonds = new HarmonicBondForce();
+    MRattleIntegrator integrator(0.01);
+    vector<Vec3> positions;
+    vector<vector<int> > dimers;
+    for (int d = 0; d < 64; d++) {
+        const int a = system.addParticle(14.0), b = system.addParticle(14.0);
+        bonds->addBond(a, b, 0.11, 0.0);
+        integrator.addRigidBody({a, b});
+        dimers.push_back({a, b});
+        const Vec3 center(0.5 + (d % 4), 0.5 + (d / 4) % 4, 0.5 + d / 16);
+        const vector<Vec3> rotation = randomRotation(200 + d);
+        positions.push_back(center - rotate(rotation, Vec3(0.055, 0, 0)));
+        positions.push_back(center + rotate(rotation, Vec3(0.055, 0, 0)));
+    }
+    bonds->setUsesPeriodicBoundaryConditions(true);  // a periodic System, as a barostat needs
+    system.addForce(bonds);
+    system.addForce(new MonteCarloBarostat(1.0, 600.0, 25));
+    system.addForce(new AndersenThermostat(600.0, 1.0));
+    std::unique_ptr<Context> context = deviceContext(GetParam(), system, integrator, "mixed");
+    context->setPositions(positions);
+    context->setVelocitiesToTemperature(600, 11);
+    const State start = context->getState(State::Positions);
+    integrator.step(20000);
+    const State end = context->getState(State::Positions);
+    Vec3 a, b, c, a0, b0, c0;
+    start.getPeriodicBoxVectors(a0, b0, c0);
+    end.getPeriodicBoxVectors(a, b, c);
+    const double deformation = maxDistanceChange(start.getPositions(), end.getPositions(), dimers);
+    std::cout << "64 rigid dimers under a MonteCarloBarostat, 20,000 steps of 10 fs, " << GetParam()
+              << " mixed: box " << a0[0] << " -> " << a[0] << " nm, largest change of a body's length " << deformation
+              << " nm" << std::endl;
+    EXPECT_NE(a0[0], a[0]);  // the barostat acted
+    EXPECT_LT(deformation, 1e-6);
+}
+
 INSTANTIATE_TEST_SUITE_P(Devices, DevicePlatform, ::testing::ValuesIn(builtDevicePlatforms()),
                          [](const ::testing::TestParamInfo<string>& info) { return info.param; });
 GTEST_ALLOW_UNINSTANTIATED_PARAMETERIZED_TEST(DevicePlatform);

@@ -131,6 +131,18 @@ private:
     /** Device atom indices of the bodies' atoms and the constraints' ends, after a reorder. */
     void mapAtoms();
     void setKernelArguments();
+    /**
+     * Whether each step rebuilds the bodies from their reference geometry and orientation:
+     * in single and mixed precision, whose round-off would otherwise random-walk the shapes.
+     * (In double it would only add state that a State does not hold.)
+     */
+    bool rebuildsShapes() const {
+        return !cc.getUseDoublePrecision();
+    }
+    /** The bodies' reference geometry from these positions (System order). */
+    void setReference(const std::vector<OpenMM::Vec3>& positions);
+    /** 9 numbers per body: the identity. */
+    std::vector<double> identityOrientations() const;
     /** How far (nm) the device's stored coordinates can be from these positions (0 in double precision). */
     double storageError(OpenMM::ContextImpl& context, const std::vector<OpenMM::Vec3>& positions) const;
 
@@ -152,11 +164,17 @@ private:
     bool hasAndersen = false, hasRandomNumbers = false, argumentsSet = false;
     /** Set by OpenMM's reorder of atoms: the force buffer then belongs to the old order. */
     bool atomsReordered = false;
+    /** Set by a checkpoint's load: the positions OpenMM read next come with the reference geometry it held. */
+    bool keepReference = false;
     /** Set while updateShapes() writes corrected positions: the Context notifies the integrator again. */
     bool writingCorrectedShapes = false;
     OpenMM::ComputeProgram program;
     OpenMM::ComputeArray bodyStart, bodyAtoms, bodyShape, clusterStart, constraintAtoms, constraintDistance;
     OpenMM::ComputeArray clusterAtomStart, clusterAtoms, freeAtoms;
+    /** Each body atom about its body's centre of mass when positions were set (bodyAtoms' order): the shape rebuilt every step. */
+    OpenMM::ComputeArray bodyReference;
+    /** Each body's orientation (9 numbers, row-major) turning its reference geometry into its shape now. */
+    OpenMM::ComputeArray bodyOrientation;
     OpenMM::ComputeKernel advanceGroups, projectBodies, constrainFreeVelocities, collideBodies;
     // Indices of the arguments set at each launch.
     int advanceBackupIndex, advanceKickTime, advanceProjectAfterKick, advanceDriftTime, advanceTolerance,

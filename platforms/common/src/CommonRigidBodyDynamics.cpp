@@ -135,6 +135,11 @@ void CommonRigidBodyDynamics::initialize(const System& system, const RigidBodyTo
     clusterAtomStart.upload(clusterAtomStarts);
     clusterAtoms.initialize<int>(cc, std::max<size_t>(1, systemClusterAtoms.size()), "mrattleClusterAtoms");
     freeAtoms.initialize<int>(cc, std::max<size_t>(1, systemFreeAtoms.size()), "mrattleFreeAtoms");
+    bodyReference.initialize(cc, std::max<size_t>(1, systemBodyAtoms.size()),
+                             doubleMixed ? sizeof(mm_double4) : sizeof(mm_float4), "mrattleBodyReference");
+    bodyReference.upload(vector<mm_double4>(bodyReference.getSize(), mm_double4(0, 0, 0, 0)), true);
+    bodyOrientation.initialize(cc, 9 * std::max(1, numBodies), mixedSize, "mrattleBodyOrientation");
+    bodyOrientation.upload(identityOrientations(), true);
     stepFailure.initialize();
     mapAtoms();
     cc.addReorderListener(new ReorderListener(*this));
@@ -151,7 +156,6 @@ void CommonRigidBodyDynamics::initialize(const System& system, const RigidBodyTo
     if (hasAndersen)
         collideBodies = program->createKernel("collideBodies");
 }
-
 
 void CommonRigidBodyDynamics::initRandomNumbers(int seed) {
     cc.getIntegrationUtilities().initRandomNumberGenerator(seed);
@@ -188,7 +192,6 @@ void CommonRigidBodyDynamics::mapAtoms() {
         constraintAtoms.upload(atoms);
     }
 }
-
 
 void CommonRigidBodyDynamics::beginStep(ContextImpl& context, const RigidBodyIntegrator& integrator,
                                         bool& forcesAreValid) {
@@ -290,48 +293,6 @@ void CommonRigidBodyDynamics::finishSteps() {
     stepFailure.synchronize();
 }
 
-double CommonRigidBodyDynamics::storageError(ContextImpl& context, const vector<Vec3>& positions) const {
-    // Relative round-off of a stored coordinate: double, or float (mixed precision too: OpenMM
-    // 7.7 stores positions set from the host without their float correction, measured).
-    const double roundoff = cc.getUseDoublePrecision() ? std::ldexp(1.0, -53) : std::ldexp(1.0, -24);
-    // OpenMM stores coordinates shifted into the periodic box: up to a box length more.
-    Vec3 a, b, c;
-    context.getPeriodicBoxVectors(a, b, c);
-    double largest = std::sqrt(std::max(a.dot(a), std::max(b.dot(b), c.dot(c))));
-    double coordinate = 0;
-    for (const Vec3& x : positions)
-        coordinate = std::max(coordinate, std::max(std::fabs(x[0]), std::max(std::fabs(x[1]), std::fabs(x[2]))));
-    return roundoff * (coordinate + largest);
-}
-
-void CommonRigidBodyDynamics::updateShapes(ContextImpl& context) {
-    if (writingCorrectedShapes)
-        return;  // the positions this call itself is writing: classified below, once written
-    stepFailure.rememberOrder();  // setting positions clears OpenMM's cell offsets
-    // Positions were just uploaded from the host: classify on the host with the core.
-    vector<Vec3> positions;
-    context.getPositions(positions);
-    HostRigidBodyRules::requireFinite(positions, "position");
-    if (shapeConstraints->apply(positions, storageError(context, positions))) {
-        // Back to the device, once: the correction is left alone by its own notification,
-        // and a body on its geometry to the storage's precision is not corrected again.
-        writingCorrectedShapes = true;
-        try {
-            context.setPositions(positions);
-        } catch (...) {
-            writingCorrectedShapes = false;
-            throw;
-        }
-        writingCorrectedShapes = false;
-        context.getPositions(positions);
-    }
-    shapes = HostRigidBodyRules::classifyShapes(bodies, positions);
-    vector<int> codes(std::max(1, numBodies), shapeCode(RigidBodyMath::Shape::General));
-    for (int b = 0; b < numBodies; b++)
-        codes[b] = shapeCode(shapes[b]);
-    bodyShape.upload(codes);
-}
-
 void CommonRigidBodyDynamics::projectVelocities(ContextImpl& context, double tolerance) {
     // Velocities are set from the host: checking them there costs one download per set.
     vector<Vec3> velocities;
@@ -375,18 +336,3 @@ int CommonRigidBodyDynamics::bodyDegreesOfFreedom() const {
     return HostRigidBodyRules::bodyDegreesOfFreedom(shapes);
 }
 
-void CommonRigidBodyDynamics::createCheckpoint(std::ostream& stream) const {
-    stepFailure.synchronize();
-    // The random stream (Andersen collisions, Langevin noise) is OpenMM's
-    // IntegrationUtilities', which OpenMM's own part of the checkpoint holds: no state here.
-    HostRigidBodyRules::writeKernelState(stream, "");
-}
-
-void CommonRigidBodyDynamics::loadCheckpoint(std::istream& stream) {
-    const std::string state = HostRigidBodyRules::readKernelState(stream);
-    if (!state.empty())
-        throw OpenMMException("the checkpoint's kernel data is not this platform's (a state of " +
-                              std::to_string(state.size()) + " bytes where none is expected)");
-    stepFailure.reset();
-    stepFailure.rememberOrder();
-}

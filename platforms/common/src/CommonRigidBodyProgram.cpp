@@ -27,6 +27,12 @@ const double SingleChordConvergence = 1e-6, SingleRigidVelocityTolerance = 1e-5;
  * counts as not finite on the device (its only finiteness test: NaN fails the comparison).
  */
 const double DeviceFiniteBound = 1e30;
+/**
+ * How far (nm) a body's atoms may be from its reference geometry in its orientation before
+ * they are taken as its new reference (something else moved it): far above the storage's
+ * round-off (float's at 30 nm from the origin: 2e-6 nm), far below a step's motion.
+ */
+const double StaleReference = 1e-4;
 
 /** A constant as the device code reads it: in the integration arithmetic's precision. */
 std::string mixedConstant(double value) {
@@ -47,6 +53,8 @@ ComputeProgram CommonRigidBodyDynamics::compileWith(const std::string& sources) 
     std::map<std::string, std::string> defines;
     if (doublePrecision)
         defines["USE_DOUBLE_MIXED"] = "1";
+    if (rebuildsShapes())
+        defines["REBUILD_SHAPES"] = "1";
     defines["MAX_ROTATION_ITERATIONS"] = std::to_string(RigidBodyMath::MaxRotationIterations);
     defines["MAX_CONSTRAINT_ITERATIONS"] = std::to_string(MaxConstraintIterations);
     defines["CHORD_CONVERGED"] = mixedConstant(doublePrecision ? RigidBodyMath::ChordConvergence : SingleChordConvergence);
@@ -55,6 +63,7 @@ ComputeProgram CommonRigidBodyDynamics::compileWith(const std::string& sources) 
         mixedConstant(doublePrecision ? RigidBodyMath::RigidVelocityTolerance : SingleRigidVelocityTolerance);
     defines["COLLISION_THRESHOLD"] = mixedConstant(RigidBodyMath::CollisionThreshold);
     defines["FINITE_BOUND"] = mixedConstant(DeviceFiniteBound);
+    defines["STALE_REFERENCE"] = mixedConstant(StaleReference);
     defines["LARGEST_SPEED"] = mixedConstant(CommonStepFailure::LargestSpeed);
     defines["SHAPE_GENERAL"] = std::to_string(shapeCode(RigidBodyMath::Shape::General));
     defines["SHAPE_LINEAR"] = std::to_string(shapeCode(RigidBodyMath::Shape::Linear));
@@ -94,6 +103,8 @@ void CommonRigidBodyDynamics::setKernelArguments() {
     advance.add(bodyStart);
     advance.add(bodyAtoms);
     advance.add(bodyShape);
+    advance.add(bodyReference);
+    advance.add(bodyOrientation);
     advance.add(clusterStart);
     advance.add(constraintAtoms);
     advance.add(constraintDistance);

@@ -35,7 +35,9 @@ DEVICE bool projectGroup(int kind, int index, int start, int end, GLOBAL const i
 
 KERNEL void advanceGroups(int numBodies, int numClusters, int numFree, GLOBAL const int* RESTRICT bodyStart,
         GLOBAL const int* RESTRICT bodyAtoms, GLOBAL const int* RESTRICT bodyShape,
-        GLOBAL const int* RESTRICT clusterStart, GLOBAL const int2* RESTRICT constraintAtoms,
+        GLOBAL mixed4* RESTRICT bodyReference, GLOBAL mixed* RESTRICT bodyOrientation,
+        GLOBAL const int* RESTRICT clusterStart,
+        GLOBAL const int2* RESTRICT constraintAtoms,
         GLOBAL const mixed* RESTRICT constraintDistance, GLOBAL const int* RESTRICT clusterAtomStart,
         GLOBAL const int* RESTRICT clusterAtoms, GLOBAL const int* RESTRICT freeAtoms,
         GLOBAL real4* RESTRICT posq, GLOBAL real4* RESTRICT posqCorrection, GLOBAL mixed4* RESTRICT velm,
@@ -87,7 +89,8 @@ KERNEL void advanceGroups(int numBodies, int numClusters, int numFree, GLOBAL co
                               posqCorrection, velm) && ok;
         if (driftTime != 0) {
             if (kind == GROUP_BODY)
-                ok = resetBody(start, end, atoms, bodyShape[index], driftTime, posq, posqCorrection, velm) && ok;
+                ok = resetBody(index, start, end, atoms, bodyReference, bodyOrientation, bodyShape[index], driftTime, posq,
+                               posqCorrection, velm) && ok;
             else if (kind == GROUP_CLUSTER)
                 ok = shakeCluster(clusterStart[index], clusterStart[index+1], constraintAtoms, constraintDistance, start,
                                   end, atoms, driftTime, tolerance, posq, posqCorrection, velm, posDelta) && ok;

@@ -60,15 +60,82 @@ DEVICE void noiseAtom(int atom, mixed a, mixed noiseScale, GLOBAL const float4* 
     velm[atom] = make_mixed4(a*v.x + sigma*g.x, a*v.y + sigma*g.y, a*v.z + sigma*g.z, v.w);
 }
 
+/** (R + R^-T) / 2: a step of Newton's iteration for the polar factor (the nearest rotation) of R. */
+DEVICE Matrix3 polarStep(Matrix3 R) {
+    Matrix3 inverse;
+    if (!inverse3(R, &inverse))
+        return R;
+    Matrix3 next;
+    next.m00 = 0.5f*(R.m00 + inverse.m00); next.m01 = 0.5f*(R.m01 + inverse.m10); next.m02 = 0.5f*(R.m02 + inverse.m20);
+    next.m10 = 0.5f*(R.m10 + inverse.m01); next.m11 = 0.5f*(R.m11 + inverse.m11); next.m12 = 0.5f*(R.m12 + inverse.m21);
+    next.m20 = 0.5f*(R.m20 + inverse.m02); next.m21 = 0.5f*(R.m21 + inverse.m12); next.m22 = 0.5f*(R.m22 + inverse.m22);
+    return next;
+}
+
+/** A body's orientation (9 numbers from orientation[9*body]). */
+DEVICE Matrix3 loadOrientation(GLOBAL const mixed* RESTRICT orientation, int body) {
+    GLOBAL const mixed* q = orientation + 9*body;
+    Matrix3 Q;
+    Q.m00 = q[0]; Q.m01 = q[1]; Q.m02 = q[2];
+    Q.m10 = q[3]; Q.m11 = q[4]; Q.m12 = q[5];
+    Q.m20 = q[6]; Q.m21 = q[7]; Q.m22 = q[8];
+    return Q;
+}
+
+DEVICE void storeOrientation(GLOBAL mixed* RESTRICT orientation, int body, Matrix3 Q) {
+    GLOBAL mixed* q = orientation + 9*body;
+    q[0] = Q.m00; q[1] = Q.m01; q[2] = Q.m02;
+    q[3] = Q.m10; q[4] = Q.m11; q[5] = Q.m12;
+    q[6] = Q.m20; q[7] = Q.m21; q[8] = Q.m22;
+}
+
+/**
+ * The body's orientation after its reset rotation P = 1 + delta: Q = P Q, made orthonormal
+ * again (one step of Newton's polar iteration, from a matrix orthonormal to round-off). Its
+ * reference geometry (reference[k] for bodyAtoms[k], about its centre of mass) turned by Q
+ * is then the body's shape, exact to round-off however many steps it takes. If the body's
+ * positions a about its centre are not Q ref (beyond STALE_REFERENCE nm: something else moved
+ * it, e.g. another integrator of a CompoundIntegrator), they become its reference, Q = 1.
+ */
+DEVICE Matrix3 turnOrientation(int body, int start, int end, GLOBAL const int* RESTRICT bodyAtoms,
+        GLOBAL mixed4* RESTRICT reference, GLOBAL mixed* RESTRICT orientation, GLOBAL const real4* RESTRICT posq,
+        GLOBAL const real4* RESTRICT posqCorrection, mixed3 origin, mixed3 center, Matrix3 delta) {
+    Matrix3 Q = loadOrientation(orientation, body);
+    mixed stale = 0;
+    for (int k = start; k < end; k++) {
+        const mixed3 a = loadPosition(posq, posqCorrection, bodyAtoms[k]) - origin - center;
+        const mixed4 q = reference[k];
+        const mixed3 d = a - apply(Q, make_mixed3(q.x, q.y, q.z));
+        stale = max(stale, dot(d, d));
+    }
+    if (!(stale <= STALE_REFERENCE*STALE_REFERENCE)) {
+        for (int k = start; k < end; k++) {
+            const mixed3 a = loadPosition(posq, posqCorrection, bodyAtoms[k]) - origin - center;
+            reference[k] = make_mixed4(a.x, a.y, a.z, 0);
+        }
+        Q = zeroMatrix();
+        Q.m00 = Q.m11 = Q.m22 = 1;
+    }
+    Matrix3 P = delta;
+    P.m00 += 1; P.m11 += 1; P.m22 += 1;
+    Q = polarStep(multiply(P, Q));
+    storeOrientation(orientation, body, Q);
+    return Q;
+}
+
 /**
  * M-RATTLE's drift and position reset of one body over h, from its positions and velocities:
  * the centre moves with the mean velocity, the orientation is the rotation that makes the
  * constraint displacement exert zero torque about the old positions; the new velocities are
- * the displacement's over h. Positions are taken relative to the body's first atom so that
- * a body far from the origin loses no digits. Returns false if no rotation was found.
+ * the displacement's over h. The new positions are the body's reference geometry in its
+ * orientation (turnOrientation), so the shape is re-imposed every step as SETTLE does and
+ * float round-off cannot random-walk it. Positions are taken relative to
+ * the body's first atom so that a body far from the origin loses no digits. Returns false if
+ * no rotation was found.
  */
-DEVICE bool resetBody(int start, int end, GLOBAL const int* RESTRICT bodyAtoms, int shape, mixed h,
-        GLOBAL real4* RESTRICT posq, GLOBAL real4* RESTRICT posqCorrection, GLOBAL mixed4* RESTRICT velm) {
+DEVICE bool resetBody(int body, int start, int end, GLOBAL const int* RESTRICT bodyAtoms, GLOBAL mixed4* RESTRICT reference,
+        GLOBAL mixed* RESTRICT orientation, int shape, mixed h, GLOBAL real4* RESTRICT posq,
+        GLOBAL real4* RESTRICT posqCorrection, GLOBAL mixed4* RESTRICT velm) {
     mixed3 origin, center, V;
     bodyCenterAndVelocity(start, end, bodyAtoms, posq, posqCorrection, velm, &origin, &center, &V);
     if (!(dot(V, V) <= FINITE_BOUND && dot(center, center) <= FINITE_BOUND))
@@ -79,13 +146,27 @@ DEVICE bool resetBody(int start, int end, GLOBAL const int* RESTRICT bodyAtoms, 
             solveLinearBodyRotation(start, end, bodyAtoms, posq, posqCorrection, velm, origin, center, V, h, &delta));
     if (!converged)
         return false;
+#ifdef REBUILD_SHAPES
+    const bool fitted = (shape != SHAPE_POINT);
+#else
+    const bool fitted = false;  // double precision: no round-off worth rebuilding from
+#endif
+    const Matrix3 rotation = (fitted ? turnOrientation(body, start, end, bodyAtoms, reference, orientation, posq,
+                                                       posqCorrection, origin, center, delta) : delta);
     const mixed3 shift = h*V;
+    const mixed3 newCenter = origin + (center + shift);
     const mixed invH = 1/h;
     for (int k = start; k < end; k++) {
         const int atom = bodyAtoms[k];
         const mixed3 x = loadPosition(posq, posqCorrection, atom);
         const mixed3 turn = apply(delta, x - origin - center);
-        storePosition(posq, posqCorrection, atom, x + (shift + turn));
+        if (fitted) {
+            const mixed4 q = reference[k];
+            const mixed3 ref = make_mixed3(q.x, q.y, q.z);
+            storePosition(posq, posqCorrection, atom, newCenter + apply(rotation, ref));
+        }
+        else
+            storePosition(posq, posqCorrection, atom, x + (shift + turn));
         const mixed4 v = velm[atom];
         velm[atom] = make_mixed4(V.x + turn.x*invH, V.y + turn.y*invH, V.z + turn.z*invH, v.w);
     }
