@@ -6,13 +6,15 @@
 #       (ignored by git): OpenMM's libraries and CUDA platform plugin, the plugin's libraries,
 #       the C++ test programs and benchmarks/cpp/device_speed; refuses if that is over 60 MiB.
 #   scripts/gpu-check.sh run                 on the GPU machine, from the repository root with
-#       .gpu/ carried: the C++ tests' CUDA cases, then device_speed (mixed precision, TIP3P
-#       boxes of 24,000, 98,304 and 985,527 atoms), within 8 minutes. Writes to $OUT (the
-#       device tool's output folder), else .gpu/out.
+#       .gpu/ carried, within 8 minutes: the device test first (120 s), then device_speed
+#       (mixed precision, TIP3P boxes of 24,000, 98,304 and 985,527 atoms, bare and PME), one
+#       process per group under a hard limit, then the other tests' CUDA cases with what is
+#       left. Writes two files to $OUT (the device tool's output folder), else .gpu/out:
+#       gpu-check.tar.gz (everything) and gpu-check-summary.txt.
 #
 # Nothing in .gpu/ is built there: the machine has CUDA 13 and its driver, no Python OpenMM,
-# no network. OpenMM's CUDA platform needs libcuda (the driver), libnvrtc.so.13 and
-# libcufft.so.12 (CUDA 13) from that machine.
+# no network. OpenMM's CUDA platform needs libcuda (the driver), libnvrtc and libcufft from
+# that machine, found wherever it has them (cuda_library_dirs).
 set -euo pipefail
 root="$(cd "$(dirname "$0")/.." && pwd)"
 stage="$root/.gpu"
@@ -44,7 +46,8 @@ stage_files() {
             cp "$program" "$stage/bin/"
         fi
     done
-    strip --strip-unneeded "$stage"/bin/* "$stage"/lib/libMRattlePlugin*.so* 2>/dev/null || true
+    # Stripped, OpenMM's own libraries too (symbol tables are most of their size).
+    find "$stage" -type f \( -name '*.so*' -o -path "$stage/bin/*" \) -exec strip --strip-unneeded {} + 2>/dev/null || true
     {
         echo "staged: $(date -u '+%Y-%m-%d %H:%M UTC') from $build"
         echo "plugin: $(git -C "$root" describe --always --dirty)"
@@ -63,63 +66,97 @@ stage_files() {
     fi
 }
 
+# Directories holding a CUDA library (libnvrtc, libcufft, libcuda) wherever this machine has
+# it: the loader's cache, every CUDA toolkit folder, the usual library folders; never the
+# toolkit's driver stubs (a stub libcuda loads and then fails every call).
+cuda_library_dirs() {
+    local name found=()
+    for name in libnvrtc.so libcufft.so libcuda.so.1; do
+        {
+            { ldconfig -p 2>/dev/null || true; } | awk -v n="$name" '$1 ~ "^"n {print $NF}'
+            find /usr/local/cuda* /usr/lib/x86_64-linux-gnu /usr/lib64 /opt /usr/lib/wsl \
+                -maxdepth 6 -name "$name*" \( -type f -o -type l \) 2>/dev/null || true
+        } | { grep -v '/stubs/' || true; } | while read -r lib; do dirname "$lib"; done
+    done | awk '!seen[$0]++'
+}
+
 run_check() {
     [ -f "$stage/MANIFEST" ] || { echo "gpu-check: no $stage (run 'scripts/gpu-check.sh stage' where it was built, carry .gpu)"; exit 1; }
-    local out="${OUT:-$stage/out}/gpu-check"
+    # At most 8 result files come back: everything goes into one archive, plus a summary.
+    local out="${OUT:-$stage/out}"
+    local work
+    work="$(mktemp -d)"
     mkdir -p "$out"
-    local start=$SECONDS
+    local start=$SECONDS deadline=440  # of the 480 s: 40 s to spare for the archive and the copy back
+    left() { echo $((deadline - (SECONDS - start))); }
     export OPENMM_PLUGIN_DIR="$stage/openmm-plugins"  # OpenMM's platforms, for the tests and device_speed
     export MRATTLE_PLUGIN_DIR="$stage/lib"             # the plugin's device kernels, for the tests
-    export LD_LIBRARY_PATH="$stage/lib:$stage/openmm-plugins${LD_LIBRARY_PATH:+:$LD_LIBRARY_PATH}"
-    local cuda
-    for cuda in /usr/local/cuda/lib64 /usr/local/cuda/lib /usr/local/cuda/targets/x86_64-linux/lib; do
-        [ -d "$cuda" ] && LD_LIBRARY_PATH="$LD_LIBRARY_PATH:$cuda"
-    done
+    local dirs
+    dirs="$(cuda_library_dirs | paste -sd: -)"
+    export LD_LIBRARY_PATH="$stage/lib:$stage/openmm-plugins${dirs:+:$dirs}${LD_LIBRARY_PATH:+:$LD_LIBRARY_PATH}"
     {
-        cat "$stage/MANIFEST" | head -4
+        head -4 "$stage/MANIFEST"
         echo "run: $(date -u '+%Y-%m-%d %H:%M UTC') on $(hostname)"
         nvidia-smi --query-gpu=name,driver_version,memory.total --format=csv 2>&1 || echo "nvidia-smi failed"
-        nvcc --version 2>&1 | tail -2 || true
+        echo "CUDA library folders found: ${dirs:-none}"
         echo "libOpenMMCUDA needs:"
         ldd "$OPENMM_PLUGIN_DIR/libOpenMMCUDA.so" | grep -E "not found|cuda|nvrtc|cufft" || true
-    } > "$out/environment.txt" 2>&1
-    cat "$out/environment.txt"
+    } > "$work/environment.txt" 2>&1
+    cat "$work/environment.txt"
 
-    # 1. The tests' CUDA cases, four programs at a time, at most 150 s in all.
-    echo "== tests (CUDA cases) =="
-    local programs=()
-    local program
+    # 1. The device test first (agreement, rigidity, failures), at most 120 s.
+    echo "== TestDevicePlatforms (CUDA) =="
+    local status=0
+    timeout 120 "$stage/bin/TestDevicePlatforms" --gtest_filter='*CUDA*' > "$work/TestDevicePlatforms.txt" 2>&1 || status=$?
+    echo "TestDevicePlatforms: exit $status$([ "$status" = 124 ] && echo ' (cut at 120 s)')" | tee "$work/summary.txt"
+
+    # 2. device_speed, one process per (size, System) group under a hard limit, so that every
+    #    group writes its rows or is named as cut: 24,000 and 98,304 atoms 45 s each, 985,527
+    #    atoms 75 s each, while time is left.
+    echo "== device_speed (mixed precision) =="
+    local n system limit
+    for n in 20 32 69; do
+        for system in bare pme; do
+            limit=45
+            [ "$n" = 69 ] && limit=75
+            if [ "$(left)" -lt $((limit + 60)) ]; then
+                echo "device_speed $n^3 waters $system: not started, $(left) s left" | tee -a "$work/summary.txt"
+                continue
+            fi
+            status=0
+            timeout "$limit" "$stage/bin/device_speed" --platform CUDA --precision mixed \
+                --plugins "$stage/lib/libMRattlePluginCUDA.so" --waters-per-side "$n" --systems "$system" \
+                --out "$work/device_speed-$n-$system.csv" --ratios "$work/device_speed-$n-$system-ratios.csv" \
+                2> "$work/device_speed-$n-$system.log" || status=$?
+            echo "device_speed $n^3 waters $system: exit $status$([ "$status" = 124 ] && echo " (cut at $limit s)")" \
+                | tee -a "$work/summary.txt"
+            cat "$work/device_speed-$n-$system-ratios.csv" 2>/dev/null | tail -n +2 | tee -a "$work/summary.txt" || true
+        done
+    done
+
+    # 3. The other test programs' CUDA cases with what is left, four at a time.
+    echo "== other tests (CUDA cases, $(left) s left) =="
+    local programs=() program
     for program in "$stage"/bin/Test*; do
-        programs+=("$program")
+        [ "$(basename "$program")" = TestDevicePlatforms ] || programs+=("$program")
     done
-    local tests_status=0
-    printf '%s\n' "${programs[@]}" | timeout 150 xargs -P 4 -I{} sh -c \
-        'name=$(basename "{}"); "{}" --gtest_filter="*CUDA*" > "'"$out"'/$name.txt" 2>&1; echo "$name: exit $?"' \
-        > "$out/tests-summary.txt" || tests_status=$?
-    if [ "$tests_status" = 124 ]; then
-        echo "tests: stopped at 150 s; the programs not listed did not finish" >> "$out/tests-summary.txt"
+    if [ "$(left)" -gt 20 ]; then
+        status=0
+        printf '%s\n' "${programs[@]}" | timeout "$(left)" xargs -P 4 -I{} sh -c \
+            'name=$(basename "{}"); "{}" --gtest_filter="*CUDA*" > "'"$work"'/$name.txt" 2>&1; echo "$name: exit $?"' \
+            >> "$work/summary.txt" || status=$?
+        [ "$status" = 124 ] && echo "other tests: cut; the programs not listed did not finish" >> "$work/summary.txt"
+    else
+        echo "other tests: not started, $(left) s left" >> "$work/summary.txt"
     fi
-    sort "$out/tests-summary.txt"
-    # Each program's totals, then every failure and the distinct reasons for skipping.
-    grep -H -E "^\[  (PASSED|SKIPPED|FAILED) +\] [0-9]+ test" "$out"/Test*.txt | sed "s|^$out/||" || true
-    grep -h -E "^\[  FAILED  \] .*\(" "$out"/Test*.txt | head -40 || true
-    grep -h -A1 ": Skipped$" "$out"/Test*.txt | grep -v -E ": Skipped$|^--$" | sort | uniq -c | head -10 || true
-
-    # 2. The benchmark: whatever of the 8 minutes is left, less a margin for writing back.
-    local left=$((450 - (SECONDS - start)))
-    echo "== device_speed (${left} s left) =="
-    local status=0 budget=$((left - 120))
-    [ "$budget" -ge 30 ] || budget=30
-    timeout "$left" "$stage/bin/device_speed" --platform CUDA --precision mixed --plugins "$stage/lib/libMRattlePluginCUDA.so" \
-        --budget "$budget" --out "$out/device_speed.csv" --ratios "$out/device_speed_ratios.csv" \
-        2> "$out/device_speed.log" || status=$?
-    echo "device_speed: exit $status"
-    cat "$out/device_speed.log" | tail -30
-    local table
-    for table in "$out/device_speed.csv" "$out/device_speed_ratios.csv"; do
-        [ -f "$table" ] && { column -s, -t < "$table" 2>/dev/null || cat "$table"; }
-    done
-    echo "gpu-check: done in $((SECONDS - start)) s; results in $out"
+    grep -H -E "^\[  (PASSED|SKIPPED|FAILED) +\] [0-9]+ test" "$work"/Test*.txt | sed "s|^$work/||" >> "$work/summary.txt" || true
+    grep -h -E "^\[  FAILED  \] .*\(" "$work"/Test*.txt | head -40 >> "$work/summary.txt" || true
+    echo "gpu-check: done in $((SECONDS - start)) s" >> "$work/summary.txt"
+    tar -czf "$out/gpu-check.tar.gz" -C "$work" .
+    cp "$work/summary.txt" "$out/gpu-check-summary.txt"
+    cat "$out/gpu-check-summary.txt"
+    echo "gpu-check: results in $out/gpu-check.tar.gz and $out/gpu-check-summary.txt"
+    rm -rf "$work"
 }
 
 case "$mode" in

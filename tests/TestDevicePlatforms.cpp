@@ -13,6 +13,7 @@
 #include <chrono>
 #include <cmath>
 #include <iostream>
+#include <limits>
 #include <sstream>
 
 using namespace OpenMM;
@@ -357,7 +358,283 @@ TEST_P(DevicePlatform, FailedStepIsReportedWithTheStateBeforeIt) {
     }
 }
 
+namespace {
 
+/**
+ * A diatomic body in a periodic 3 nm box with a cutoff (so that the device reorders and
+ * wraps atoms: first at the end of the first step), and a strip 1.3 < x < 2 where a huge
+ * force along -y acts: an atom entering it spins the body up so fast that no rotation
+ * satisfies its next reset.
+ */
+System stripSystem() {
+    System system;
+    system.setDefaultPeriodicBoxVectors(Vec3(3, 0, 0), Vec3(0, 3, 0), Vec3(0, 0, 3));
+    system.addParticle(12.0);
+    system.addParticle(16.0);
+    HarmonicBondForce* bond = new HarmonicBondForce();  // one molecule for OpenMM's wrapping
+    bond->addBond(0, 1, 0.1, 0.0);
+    system.addForce(bond);
+    CustomExternalForce* strip = new CustomExternalForce("1e7*y*step(x-1.3)*step(2-x)");
+    strip->addParticle(0, {});
+    strip->addParticle(1, {});
+    system.addForce(strip);
+    NonbondedForce* cutoff = new NonbondedForce();
+    cutoff->setNonbondedMethod(NonbondedForce::CutoffPeriodic);
+    cutoff->setCutoffDistance(1.0);
+    cutoff->addParticle(0, 0.1, 0);
+    cutoff->addParticle(0, 0.1, 0);
+    cutoff->addException(0, 1, 0, 0.1, 0);
+    system.addForce(cutoff);
+    return system;
+}
+
+} // namespace
+
+TEST_P(DevicePlatform, AFailureInsideStepNIsFoundLateAndUndoneExactly) {
+    // The device checks the failure flag one step late and at the end of step(n): a run of
+    // step(300) that fails at about step 100 must end exactly as step(1) calls do just
+    // before the failing step (positions, velocities, time, step count), and raise.
+    System system = stripSystem();
+    const vector<Vec3> positions = {Vec3(1.0, 1.5, 1.5), Vec3(1.1, 1.5, 1.5)};
+    const vector<Vec3> velocities = {Vec3(1, 0, 0), Vec3(1, 0, 0)};
+    State beforeFailure;
+    string stepwiseMessage;
+    {
+        MRattleIntegrator integrator(0.002);
+        std::unique_ptr<Context> context = deviceContext(GetParam(), system, integrator, "double");
+        context->setPositions(positions);
+        context->setVelocities(velocities);
+        for (int i = 0; i < 300 && stepwiseMessage.empty(); i++) {
+            State state = context->getState(State::Positions | State::Velocities);
+            try {
+                integrator.step(1);
+            } catch (const OpenMMException& e) {
+                stepwiseMessage = e.what();
+                beforeFailure = state;
+            }
+        }
+    }
+    ASSERT_NE(string::npos, stepwiseMessage.find("no rotation")) << stepwiseMessage;
+    ASSERT_GT(beforeFailure.getStepCount(), 50);
+    MRattleIntegrator integrator(0.002);
+    std::unique_ptr<Context> context = deviceContext(GetParam(), system, integrator, "double");
+    context->setPositions(positions);
+    context->setVelocities(velocities);
+    const string message = messageOf([&] { integrator.step(300); });
+    EXPECT_EQ(0u, message.find("MRattleIntegrator: at step " + std::to_string(beforeFailure.getStepCount()) + " "))
+        << message;
+    State state = context->getState(State::Positions | State::Velocities);
+    std::cout << "a failure at step " << beforeFailure.getStepCount() << " inside step(300) on " << GetParam()
+              << ": state put back within " << maxDeviation(beforeFailure.getPositions(), state.getPositions())
+              << " nm of the stepwise run's" << std::endl;
+    EXPECT_EQ(beforeFailure.getStepCount(), state.getStepCount());
+    EXPECT_EQ(beforeFailure.getTime(), state.getTime());
+    EXPECT_EQ(0.0, maxDeviation(beforeFailure.getPositions(), state.getPositions()));
+    EXPECT_EQ(0.0, maxDeviation(beforeFailure.getVelocities(), state.getVelocities()));
+    // Usable again once the body is out of the strip.
+    context->setPositions(positions);
+    context->setVelocities(velocities);
+    integrator.step(10);
+    EXPECT_EQ(beforeFailure.getStepCount() + 10, context->getState(State::Positions).getStepCount());
+}
+
+TEST_P(DevicePlatform, AFailureFoundAtAReorderingIsUndoneInTheNewOrder) {
+    // A spinning body drifts across the box's edge in 249 short steps; then a step ten
+    // times as long fails (no rotation), and OpenMM's next reordering (every 250 steps; it
+    // wraps the body back by a box vector) comes before the lazy check, so the failure is
+    // found there: the state put back is the one before the failed step, as OpenMM reports
+    // it (cell offsets undone), in mixed precision.
+    System system = stripSystem();
+    const vector<Vec3> positions = {Vec3(2.80, 0.5, 0.5), Vec3(2.90, 0.5, 0.5)};
+    const vector<Vec3> velocities = {Vec3(2, 50 * 16.0 / 28, 0), Vec3(2, -50 * 12.0 / 28, 0)};
+    MRattleIntegrator integrator(0.0005);
+    std::unique_ptr<Context> context = deviceContext(GetParam(), system, integrator, "mixed");
+    context->setPositions(positions);
+    context->setVelocities(velocities);
+    integrator.step(249);
+    const State before = context->getState(State::Positions | State::Velocities);
+    ASSERT_GT(0.5 * (before.getPositions()[0][0] + before.getPositions()[1][0]), 3.0);  // across the edge
+    integrator.setStepSize(0.01);
+    const string message = messageOf([&] { integrator.step(3); });
+    EXPECT_EQ(0u, message.find("MRattleIntegrator: at step 249 ")) << message;
+    State state = context->getState(State::Positions | State::Velocities);
+    EXPECT_EQ(249, state.getStepCount());
+    EXPECT_EQ(before.getTime(), state.getTime());
+    EXPECT_LT(maxDeviation(before.getPositions(), state.getPositions()), 1e-12);
+    EXPECT_EQ(0.0, maxDeviation(before.getVelocities(), state.getVelocities()));
+    integrator.setStepSize(0.0005);
+    integrator.step(5);
+    state = context->getState(State::Positions);
+    EXPECT_EQ(254, state.getStepCount());
+    const Vec3 bond = state.getPositions()[1] - state.getPositions()[0];
+    EXPECT_LT(std::fabs(std::sqrt(bond.dot(bond)) - 0.1), 1e-6);
+}
+
+TEST_P(DevicePlatform, ABodyOfTwoMoleculesAcrossTheBoxEdgeStaysWholeThroughReorderings) {
+    // Two waters declared as one body with nothing joining them (two molecules for OpenMM),
+    // straddling the x edge of a periodic box with a cutoff: OpenMM's reorderings (the first
+    // at the first step, then every 250 steps) wrap each molecule on its own unless it knows
+    // the body (CommonBodyForceInfo). Before, the body was torn by a box length.
+    const Molecule w = water();
+    System system;
+    system.setDefaultPeriodicBoxVectors(Vec3(2, 0, 0), Vec3(0, 2, 0), Vec3(0, 0, 2));
+    NonbondedForce* cutoff = new NonbondedForce();
+    cutoff->setNonbondedMethod(NonbondedForce::CutoffPeriodic);
+    cutoff->setCutoffDistance(0.9);
+    vector<Vec3> positions;
+    vector<int> body;
+    for (int copy = 0; copy < 2; copy++)
+        for (size_t k = 0; k < w.sites.size(); k++) {
+            body.push_back(system.addParticle(w.masses[k]));
+            cutoff->addParticle(0, 0.1, 0);
+            positions.push_back(w.sites[k] + Vec3(copy == 0 ? 1.93 : 2.07, 1, 1));
+        }
+    system.addForce(cutoff);
+    MRattleIntegrator integrator(0.002);
+    integrator.addRigidBody(body);
+    std::unique_ptr<Context> context = deviceContext(GetParam(), system, integrator, "double");
+    context->setPositions(positions);
+    context->setVelocitiesToTemperature(300, 5);
+    const vector<Vec3> start = context->getState(State::Positions).getPositions();
+    double largest = 0;
+    for (int block = 0; block < 4; block++) {
+        integrator.step(260);  // past a reordering each time
+        largest = std::max(largest, maxDistanceChange(start, context->getState(State::Positions).getPositions(), {body}));
+    }
+    std::cout << "a body of two waters across the box edge, 1,040 steps, " << GetParam()
+              << " (double): intra-body distances changed by " << largest << " nm" << std::endl;
+    EXPECT_LT(largest, 1e-10);
+}
+
+TEST_P(DevicePlatform, AnInfiniteForceIsFoundByTheSpeedItGives) {
+    // OpenMM sums device forces in fixed point: an infinite force arrives as about 2e9
+    // kJ/mol/nm, which the step sees as a speed beyond CommonStepFailure::LargestSpeed. (A
+    // NaN force arrives as that too on x86, as through pocl, but as 0 on CUDA: not tested.)
+    System system;
+    for (double m : {16.0, 1.0, 1.0})
+        system.addParticle(m);
+    CustomExternalForce* push = new CustomExternalForce("k*x");
+    push->addGlobalParameter("k", 0.0);
+    for (int i = 0; i < 3; i++)
+        push->addParticle(i, {});
+    system.addForce(push);
+    MRattleIntegrator integrator(0.002);
+    integrator.addRigidBody({0, 1, 2});
+    std::unique_ptr<Context> context = deviceContext(GetParam(), system, integrator, "double");
+    context->setPositions({Vec3(0, 0, 0), Vec3(0.1, 0, 0), Vec3(0, 0.1, 0)});
+    context->setVelocities({Vec3(1, 0, 0), Vec3(1, 0, 0), Vec3(1, 0, 0)});
+    integrator.step(3);
+    const State before = context->getState(State::Positions | State::Velocities);
+    context->setParameter("k", std::numeric_limits<double>::infinity());
+    const string message = messageOf([&] { integrator.step(5); });
+    EXPECT_NE(string::npos, message.find("not finite")) << message;
+    const State after = context->getState(State::Positions | State::Velocities);
+    EXPECT_EQ(before.getStepCount(), after.getStepCount());
+    EXPECT_EQ(0.0, maxDeviation(before.getPositions(), after.getPositions()));
+    EXPECT_EQ(0.0, maxDeviation(before.getVelocities(), after.getVelocities()));
+    context->setParameter("k", 0.0);
+    integrator.step(2);
+    EXPECT_EQ(before.getStepCount() + 2, context->getState(State::Positions).getStepCount());
+}
+
+namespace {
+
+/** The largest |O-H - 0.09572| over waters whose atoms are 3w, 3w+1, 3w+2 (O, H, H). */
+double largestOHError(const vector<Vec3>& x) {
+    double largest = 0;
+    for (size_t w = 0; w + 2 < x.size(); w += 3)
+        for (int h = 1; h <= 2; h++) {
+            const Vec3 d = x[w + h] - x[w];
+            largest = std::max(largest, std::fabs(std::sqrt(d.dot(d)) - 0.09572));
+        }
+    return largest;
+}
+
+} // namespace
+
+TEST_P(DevicePlatform, WaterShapesStayExactFarFromTheOriginLikeSettle) {
+    // 27 rigid TIP3P waters (constrained as OpenMM's rigid water is) 30 nm from the origin,
+    // no forces, 50,000 steps of 2 fs: each step rebuilds a body from its reference geometry
+    // (CommonRigidBodyDynamics::setReference), so the O-H error stays at the storage's
+    // round-off as SETTLE's does instead of random-walking (before: 300x SETTLE's in single
+    // precision after 10,000 steps). The yardstick: OpenMM's Verlet with SETTLE, same run.
+    const double OH = 0.09572, HH = 2 * OH * std::sin(104.52 * M_PI / 360);
+    System system;
+    vector<Vec3> positions;
+    for (int w = 0; w < 27; w++) {
+        const int o = system.addParticle(15.9994), h1 = system.addParticle(1.008), h2 = system.addParticle(1.008);
+        system.addConstraint(o, h1, OH);
+        system.addConstraint(o, h2, OH);
+        system.addConstraint(h1, h2, HH);
+        const vector<Vec3> rotation = randomRotation(100 + w);
+        const Vec3 center(30 + 0.4 * (w % 3), 30 + 0.4 * ((w / 3) % 3), 30 + 0.4 * (w / 9));
+        positions.push_back(center);
+        positions.push_back(center + rotate(rotation, Vec3(OH, 0, 0)));
+        positions.push_back(center + rotate(rotation, Vec3(OH * std::cos(104.52 * M_PI / 180), OH * std::sin(104.52 * M_PI / 180), 0)));
+    }
+    for (const string precision : {"single", "mixed"}) {
+        double errors[2];
+        for (int run = 0; run < 2; run++) {
+            std::unique_ptr<Integrator> integrator(run == 0 ? (Integrator*) new VerletIntegrator(0.002)
+                                                            : (Integrator*) new MRattleIntegrator(0.002));
+            std::unique_ptr<Context> context = deviceContext(GetParam(), system, *integrator, precision);
+            context->setPositions(positions);
+            context->setVelocitiesToTemperature(300, 9);
+            errors[run] = 0;
+            for (int block = 0; block < 10; block++) {
+                integrator->step(5000);
+                errors[run] = std::max(errors[run], largestOHError(context->getState(State::Positions).getPositions()));
+            }
+        }
+        std::cout << "27 waters 30 nm from the origin, 50,000 steps of 2 fs, " << GetParam() << " " << precision
+                  << ": largest O-H error (every 5,000 steps) Verlet+SETTLE " << errors[0] << " nm, M-RATTLE "
+                  << errors[1] << " nm" << std::endl;
+        EXPECT_GT(errors[0], 0.0) << precision;
+        EXPECT_LE(errors[1], std::max(2 * errors[0], 1e-8)) << precision;
+    }
+}
+
+TEST_P(DevicePlatform, ARigidIdealGasUnderABarostatKeepsItsBodiesInMixedPrecision) {
+    // OpenMM's testIdealGas in rigid form: 64 rigid dimers (a zero-force bond makes each one
+    // molecule for the barostat), no interactions, 600 K, a MonteCarloBarostat at 1 bar,
+    // 20,000 steps of 10 fs in mixed precision. The bodies keep their shape within 1e-6 nm
+    // (before the reference geometry: 9.6e-5 nm on OpenCL, issue 31).
+    System system;
+    system.setDefaultPeriodicBoxVectors(Vec3(4, 0, 0), Vec3(0, 4, 0), Vec3(0, 0, 4));
+    HarmonicBondForce* bonds = new HarmonicBondForce();
+    MRattleIntegrator integrator(0.01);
+    vector<Vec3> positions;
+    vector<vector<int> > dimers;
+    for (int d = 0; d < 64; d++) {
+        const int a = system.addParticle(14.0), b = system.addParticle(14.0);
+        bonds->addBond(a, b, 0.11, 0.0);
+        integrator.addRigidBody({a, b});
+        dimers.push_back({a, b});
+        const Vec3 center(0.5 + (d % 4), 0.5 + (d / 4) % 4, 0.5 + d / 16);
+        const vector<Vec3> rotation = randomRotation(200 + d);
+        positions.push_back(center - rotate(rotation, Vec3(0.055, 0, 0)));
+        positions.push_back(center + rotate(rotation, Vec3(0.055, 0, 0)));
+    }
+    bonds->setUsesPeriodicBoundaryConditions(true);  // a periodic System, as a barostat needs
+    system.addForce(bonds);
+    system.addForce(new MonteCarloBarostat(1.0, 600.0, 25));
+    system.addForce(new AndersenThermostat(600.0, 1.0));
+    std::unique_ptr<Context> context = deviceContext(GetParam(), system, integrator, "mixed");
+    context->setPositions(positions);
+    context->setVelocitiesToTemperature(600, 11);
+    const State start = context->getState(State::Positions);
+    integrator.step(20000);
+    const State end = context->getState(State::Positions);
+    Vec3 a, b, c, a0, b0, c0;
+    start.getPeriodicBoxVectors(a0, b0, c0);
+    end.getPeriodicBoxVectors(a, b, c);
+    const double deformation = maxDistanceChange(start.getPositions(), end.getPositions(), dimers);
+    std::cout << "64 rigid dimers under a MonteCarloBarostat, 20,000 steps of 10 fs, " << GetParam()
+              << " mixed: box " << a0[0] << " -> " << a[0] << " nm, largest change of a body's length " << deformation
+              << " nm" << std::endl;
+    EXPECT_NE(a0[0], a[0]);  // the barostat acted
+    EXPECT_LT(deformation, 1e-6);
+}
 
 INSTANTIATE_TEST_SUITE_P(Devices, DevicePlatform, ::testing::ValuesIn(builtDevicePlatforms()),
                          [](const ::testing::TestParamInfo<string>& info) { return info.param; });

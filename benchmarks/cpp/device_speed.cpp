@@ -20,12 +20,14 @@
  * After the batches the largest error of the water geometry (O-H and H-H distances) and
  * whether the state is finite are recorded.
  *
- * Usage: device_speed [--platform CUDA] [--precision mixed] [--waters-per-side 20,32,69]
+ * Usage: device_speed [--platform CUDA] [--precision mixed] [--waters-per-side 20,32,69] [--systems bare,pme]
  *                     [--repeats 3] [--batch-seconds 0.5] [--warmup 50] [--budget SECONDS]
  *                     [--plugins FILE[,FILE]] [--out FILE] [--ratios FILE] [--small]
  * --small: 6 waters per side (648 atoms), 2 repeats of 0.2 s, 5 warm-up steps.
  * --budget: a (size, System) group is not started once this many seconds have passed (it is
  * named as skipped), so a run with a wall-clock limit still writes what it measured.
+ * --systems: which of the two Systems to time (default both), so that a script can run each
+ * (size, System) group as its own process under a hard time limit (scripts/gpu-check.sh).
  * --plugins: the plugin's device kernel libraries to load (default: those of this build).
  * OpenMM's platforms come from OPENMM_PLUGIN_DIR, else the build's OpenMM plugin folder.
  * Timings go to --out (default stdout), the targets to --ratios (default stderr), as CSV.
@@ -58,7 +60,7 @@ namespace {
 struct Options {
     string platform = "CUDA", precision = "mixed", out, ratios;
     vector<int> watersPerSide = {20, 32, 69};  // 24,000, 98,304 and 985,527 atoms
-    vector<string> plugins;
+    vector<string> plugins, systems = {"bare", "pme"};
     int repeats = 3, warmup = 50;
     double batchSeconds = 0.5, budget = 0;
 };
@@ -99,6 +101,8 @@ Options parse(int argc, char** argv) {
             options.budget = std::stod(value);
         else if (flag == "--plugins")
             options.plugins = split(value);
+        else if (flag == "--systems")
+            options.systems = split(value);
         else if (flag == "--out")
             options.out = value;
         else if (flag == "--ratios")
@@ -339,6 +343,8 @@ int main(int argc, char** argv) {
             WaterBox box = buildWaterBox(n, 1234 + n);
             for (bool pme : {false, true}) {
                 const string systemName = pme ? "pme" : "bare";
+                if (std::find(options.systems.begin(), options.systems.end(), systemName) == options.systems.end())
+                    continue;
                 const int atoms = 3 * box.waters;
                 if (options.budget > 0 && secondsSince(begin) > options.budget) {
                     std::cerr << "device_speed: skipped " << systemName << " at " << atoms << " atoms: the budget of "
@@ -366,7 +372,7 @@ int main(int argc, char** argv) {
                     runs.push_back(std::move(run));
                 }
                 // Warm up, then size each batch to about batchSeconds (whole hundreds of steps
-                // when that many: M-RATTLE reads its failure flag every 100 steps).
+                // when that many; each batch is one step(n), which checks the failure flag at its end).
                 vector<double> sync;
                 for (Run& run : runs) {
                     run.integrator->step(options.warmup);

@@ -150,6 +150,8 @@ private:
     bool minimizing = false;
     /** Throw unless bound to a Context. */
     void requireContext() const;
+    /** step()'s steps; step() then has the kernel check those it did not yet (finishSteps()). */
+    void stepLoop(int steps);
     /** The kernel's translational, rotational and free kinetic energies (index 0, 1, 2). */
     double kineticEnergyPart(int part);
     /** Whether this integrator is the one that steps the Context (it may be a member of a CompoundIntegrator). */

@@ -272,6 +272,18 @@ void RigidBodyIntegrator::step(int steps) {
     requireContext();
     stepState.requireSteppable(getStepSize());
     shapeWatch.requireShapesKept(*context, topology);
+    try {
+        stepLoop(steps);
+        kernel.getAs<RigidBodyKernel>().finishSteps(*context);
+    } catch (...) {
+        // A failed step found late is the cause of anything else that went wrong after it.
+        stepState.invalidateForces();
+        kernel.getAs<RigidBodyKernel>().finishSteps(*context);
+        throw;
+    }
+}
+
+void RigidBodyIntegrator::stepLoop(int steps) {
     for (int i = 0; i < steps; i++) {
         // Another integrator (of a CompoundIntegrator) stepped since this one did, or
         // velocities were set while it was not current: this integrator's bodies decide

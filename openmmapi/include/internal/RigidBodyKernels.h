@@ -50,9 +50,10 @@ public:
      * forces in the integrator's order, then endStep). beginStep does, with an
      * AndersenThermostat in the System, the collisions of whole bodies (a body with a collided
      * atom gets fresh thermal velocities as a whole), then the forces unless forcesAreValid.
-     * endStep advances time and step count. A step that fails throws an OpenMMException,
-     * found before the step count moves, naming the integrator (IntegratorName()), and
-     * leaves positions, velocities, time and step count as they were.
+     * endStep advances time and step count. A step that fails throws an OpenMMException
+     * naming the integrator (IntegratorName()), from this execute(), a later one of the same
+     * step(n) call, or finishSteps() (the device platforms find a failure one step late), and
+     * leaves positions, velocities, box, time and step count as they were before that step.
      *
      * forcesAreValid -- in: the Context's forces are those at the current positions for the
      * integration force groups; out: true after a step.
@@ -88,6 +89,14 @@ public:
      */
     virtual void computeKineticEnergies(OpenMM::ContextImpl& context, double& translational, double& rotational,
                                         double& free) = 0;
+    /**
+     * The end of a step(n) call (or of one a step of which threw): a platform that finds a
+     * failed step late (the device platforms) checks every step not yet checked now, puts
+     * back the state from before a failed one and throws. Default: nothing (each step was
+     * checked as it ended).
+     */
+    virtual void finishSteps(OpenMM::ContextImpl& context) {
+    }
     /** Whether body number index is linear (collinear atoms, 5 degrees of freedom) at the last positions set. */
     virtual bool isBodyLinear(int index) const = 0;
     /** The bodies' degrees of freedom at the last positions set: 6 each, 5 if linear, 3 if its atoms coincide. */

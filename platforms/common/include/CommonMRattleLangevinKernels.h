@@ -10,7 +10,8 @@ namespace MRattlePlugin {
 /**
  * MRattleLangevinIntegrator on the common compute platforms: LangevinMiddle's splitting
  * with each drift reset by M-RATTLE and the velocities projected after the kick and after
- * the noise (OpenMM's device random numbers, which its checkpoints hold).
+ * the noise (OpenMM's device random numbers, which its checkpoints hold): two fused passes
+ * per step (CommonRigidBodyDynamics::advance).
  */
 class CommonIntegrateMRattleLangevinStepKernel : public CommonRigidBodyStepKernel<IntegrateMRattleLangevinStepKernel> {
 public:
@@ -23,11 +24,6 @@ public:
 protected:
     void initializeIntegrator(const OpenMM::System& system, const MRattleLangevinIntegrator& integrator) override;
 
-private:
-    OpenMM::ComputeProgram program;
-    OpenMM::ComputeKernel langevinNoise;
-    int noiseDecay, noiseScale, noiseRandomIndex;  // argument indices
-    bool argumentsSet = false;
 };
 
 } // namespace MRattlePlugin

@@ -3,6 +3,7 @@
 
 #include "BodyShapeConstraints.h"
 #include "CommonBodyKineticEnergy.h"
+#include "CommonStepFailure.h"
 #include "RigidBodyTopology.h"
 #include "mrattle/RigidBodyMath.h"
 #include "openmm/System.h"
@@ -28,7 +29,7 @@ class RigidBodyIntegrator;
  * (OpenCL, CUDA), as ReferenceRigidBodyDynamics does on Reference and CPU: the body and
  * free-constraint arrays on the device (mapped to the device's atom order whenever OpenMM
  * reorders atoms), the phases of a step (kicks, drift and reset, projection, forces), the
- * failure check at the end of every step with the state put back, shapes, temperature
+ * failure check (CommonStepFailure: lazy within step(n), the state put back), shapes, temperature
  * velocities, kinetic energy and checkpoints. One work item per body or per cluster of
  * free constraints. An integrator's kernel (CommonMRattleKernels.h, ...) sequences the
  * phases.
@@ -51,13 +52,15 @@ public:
     /** Add or set a kernel argument in the precision of the integration arithmetic ('mixed'). */
     void addMixedArg(OpenMM::ComputeKernel& kernel, double value) const;
     void setMixedArg(OpenMM::ComputeKernel& kernel, int index, double value) const;
+    /** Start OpenMM's device random numbers (before the first step): the passes' noise draws from them. */
+    void initRandomNumbers(int seed);
     /** Whether the System has an AndersenThermostat (its seed then seeds OpenMM's device random numbers). */
     bool hasAndersenThermostat() const {
         return hasAndersen;
     }
     /** The failure flag, for an integrator's own kernels. */
     OpenMM::ComputeArray& failureFlag() {
-        return failure;
+        return stepFailure.flag();
     }
 
     /**
@@ -66,20 +69,45 @@ public:
      * positions and atom order.
      */
     void beginStep(OpenMM::ContextImpl& context, const RigidBodyIntegrator& integrator, bool& forcesAreValid);
-    /** A kick over kickTime (0: none), a drift over h, the bodies' resets and the free constraints. */
+    /**
+     * The phases of one fused pass over the groups of atoms that move together (a body, a
+     * cluster of free constraints, a free atom), in this order, each if asked for: a kick
+     * over kickTime with the Context's forces; RATTLE's velocity step; a drift over
+     * driftTime with the bodies' resets and SHAKE; Langevin noise (v = a v + noiseScale
+     * sqrt(1/m) g, a = noiseDecay) followed by the velocity step; the velocity step.
+     */
+    struct Pass {
+        double kickTime = 0;
+        bool projectAfterKick = false;
+        double driftTime = 0;
+        double noiseDecay = 1, noiseScale = 0;
+        bool projectAtEnd = false;
+    };
+    /**
+     * One launch of the device (kernels/advance.cc); the step's first pass also backs up the
+     * state. Free constraints converge to the tolerance of the step (beginStep).
+     */
+    void advance(const Pass& pass);
+    /** A kick over kickTime (0: none), a drift over h, the bodies' resets and the free constraints: one pass. */
     void driftAndReset(double kickTime, double h, double tolerance);
-    /** A kick of the Context's velocities over this time with its forces. */
+    /** A kick of the Context's velocities over this time with its forces: one pass. */
     void kick(double time);
-    /** RATTLE's velocity step: bodies onto rigid-body motion (only those not rigid, if asked), free constraints. */
+    /**
+     * RATTLE's velocity step: bodies onto rigid-body motion (only those not rigid, if asked),
+     * free constraints (outside a step's passes: velocities set from the host, collisions).
+     */
     void project(double tolerance, bool onlyIfNotRigid);
     /** Virtual sites at the new positions, then the forces there. */
     void computeForces(OpenMM::ContextImpl& context, const RigidBodyIntegrator& integrator, bool& forcesAreValid);
     /**
-     * The end of every step: if anything of it failed, put the state back and throw an
-     * OpenMMException (time and step count unchanged); else advance the clock and let
-     * OpenMM reorder atoms (the forces are then no longer those of the atoms' order).
+     * The end of every step: advance the clock, let OpenMM reorder atoms (the forces are
+     * then no longer those of the atoms' order), and check the previous step's failure flag
+     * without waiting for this one's (CommonStepFailure): a failure found puts back the
+     * state from before the failed step and throws an OpenMMException.
      */
     void endStep(double stepSize, bool& forcesAreValid);
+    /** The end of a step(n) call: the blocking check of the steps not yet checked. */
+    void finishSteps();
 
     /** RigidBodyKernel's work, the same for every integrator. */
     void updateShapes(OpenMM::ContextImpl& context);
@@ -98,37 +126,60 @@ public:
 
 private:
     class ReorderListener;
+    /** The device's code of a body's shape (bodyShape[body]; SHAPE_* in the device code). */
+    static int shapeCode(RigidBodyMath::Shape shape);
     /** Device atom indices of the bodies' atoms and the constraints' ends, after a reorder. */
     void mapAtoms();
     void setKernelArguments();
+    /**
+     * Whether each step rebuilds the bodies from their reference geometry and orientation:
+     * in single and mixed precision, whose round-off would otherwise random-walk the shapes.
+     * (In double it would only add state that a State does not hold.)
+     */
+    bool rebuildsShapes() const {
+        return !cc.getUseDoublePrecision();
+    }
+    /** The bodies' reference geometry from these positions (System order). */
+    void setReference(const std::vector<OpenMM::Vec3>& positions);
+    /** 9 numbers per body: the identity. */
+    std::vector<double> identityOrientations() const;
     /** How far (nm) the device's stored coordinates can be from these positions (0 in double precision). */
     double storageError(OpenMM::ContextImpl& context, const std::vector<OpenMM::Vec3>& positions) const;
-    /** Throw, with the state put back, if the failure flag is set. */
-    void checkStep();
 
     OpenMM::ComputeContext& cc;
-    const std::string integratorName;
+    /** Mutable: a checkpoint (const) is written only after the unchecked steps are checked. */
+    mutable CommonStepFailure stepFailure;
     RigidBodyTopology bodies;
-    std::vector<int> systemBodyAtoms, systemConstraintAtoms;  // System atom indices, body-major / cluster-major
+    // System atom indices: body-major, cluster-major (constraint ends; each atom once), the rest.
+    std::vector<int> systemBodyAtoms, systemConstraintAtoms, systemClusterAtoms, systemFreeAtoms;
     std::vector<RigidBodyMath::Shape> shapes;
     std::vector<double> inverseMasses;
     std::unique_ptr<BodyShapeConstraints> shapeConstraints;
     std::unique_ptr<CommonBodyKineticEnergy> bodyKineticEnergy;  // reads bodyStart and bodyAtoms
-    int numBodies = 0, numClusters = 0;
-    bool hasAndersen = false, argumentsSet = false;
+    int numBodies = 0, numClusters = 0, numFree = 0;
+    /** The step's index for the failure flag until its first pass has backed up the state, then -1. */
+    int backupStepIndex = -1;
+    /** The free constraints' tolerance in this step's passes. */
+    double tolerance = 1e-5;
+    bool hasAndersen = false, hasRandomNumbers = false, argumentsSet = false;
     /** Set by OpenMM's reorder of atoms: the force buffer then belongs to the old order. */
     bool atomsReordered = false;
+    /** Set by a checkpoint's load: the positions OpenMM read next come with the reference geometry it held. */
+    bool keepReference = false;
     /** Set while updateShapes() writes corrected positions: the Context notifies the integrator again. */
     bool writingCorrectedShapes = false;
     OpenMM::ComputeProgram program;
-    OpenMM::ComputeArray bodyStart, bodyAtoms, bodyLinear, clusterStart, constraintAtoms, constraintDistance;
-    OpenMM::ComputeArray newVelocity, failure, posqBackup, correctionBackup, velmBackup;
-    OpenMM::ComputeKernel kickAndDrift, resetBodies, constrainFreePositions, applyPositionStep, kickVelocities,
-        projectBodies, constrainFreeVelocities, collideBodies, backupState;
+    OpenMM::ComputeArray bodyStart, bodyAtoms, bodyShape, clusterStart, constraintAtoms, constraintDistance;
+    OpenMM::ComputeArray clusterAtomStart, clusterAtoms, freeAtoms;
+    /** Each body atom about its body's centre of mass when positions were set (bodyAtoms' order): the shape rebuilt every step. */
+    OpenMM::ComputeArray bodyReference;
+    /** Each body's orientation (9 numbers, row-major) turning its reference geometry into its shape now. */
+    OpenMM::ComputeArray bodyOrientation;
+    OpenMM::ComputeKernel advanceGroups, projectBodies, constrainFreeVelocities, collideBodies;
     // Indices of the arguments set at each launch.
-    int kickAndDriftKickTime, kickAndDriftDriftTime, resetBodiesDriftTime, freePositionsDriftTime,
-        freePositionsTolerance, kickVelocitiesTime, projectOnlyIfNotRigid, freeVelocitiesTolerance, collideKT,
-        collideRandomIndex;
+    int advanceBackupIndex, advanceKickTime, advanceProjectAfterKick, advanceDriftTime, advanceTolerance,
+        advanceNoiseDecay, advanceNoiseScale, advanceRandomIndex, advanceProjectAtEnd, projectOnlyIfNotRigid,
+        freeVelocitiesTolerance, collideKT, collideRandomIndex;
 };
 
 } // namespace MRattlePlugin

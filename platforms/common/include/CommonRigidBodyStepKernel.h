@@ -51,6 +51,10 @@ public:
         OpenMM::ContextSelector selector(dynamics.computeContext());
         dynamics.kineticEnergies(translational, rotational, free);
     }
+    void finishSteps(OpenMM::ContextImpl& context) override {
+        OpenMM::ContextSelector selector(dynamics.computeContext());
+        dynamics.finishSteps();
+    }
     bool isBodyLinear(int index) const override {
         return dynamics.isLinear(index);
     }

@@ -1,6 +1,4 @@
 #include "CommonMRattleLangevinKernels.h"
-#include "CommonKernelArguments.h"
-#include "CommonMRattleKernelSources.h"
 #include "openmm/common/IntegrationUtilities.h"
 #include "openmm/reference/SimTKOpenMMRealType.h"
 #include <cmath>
@@ -10,52 +8,40 @@ using namespace OpenMM;
 
 void CommonIntegrateMRattleLangevinStepKernel::initializeIntegrator(const System& system,
                                                                     const MRattleLangevinIntegrator& integrator) {
-    ComputeContext& cc = dynamics.computeContext();
     // Now, not at the first step: OpenMM's checkpoints hold the device random state only
     // once the generator exists, so a new Context must have it before loading one. OpenMM
     // has one device generator: with an AndersenThermostat it already has that one's seed.
     if (!dynamics.hasAndersenThermostat())
-        cc.getIntegrationUtilities().initRandomNumberGenerator(integrator.getRandomNumberSeed());
-    program = dynamics.compileWith(CommonMRattleKernelSources::langevin);
-    langevinNoise = program->createKernel("langevinNoise");
+        dynamics.initRandomNumbers(integrator.getRandomNumberSeed());
 }
 
 void CommonIntegrateMRattleLangevinStepKernel::execute(ContextImpl& context, const MRattleLangevinIntegrator& integrator,
                                                        bool& forcesAreValid) {
-    ComputeContext& cc = dynamics.computeContext();
-    ContextSelector selector(cc);
-    IntegrationUtilities& integration = cc.getIntegrationUtilities();
-    if (!argumentsSet) {
-        CommonKernelArguments noise(langevinNoise, cc.getUseDoublePrecision() || cc.getUseMixedPrecision());
-        noise.add(cc.getNumAtoms());
-        noise.add(cc.getVelm());
-        noiseDecay = noise.addMixed(1.0);
-        noiseScale = noise.addMixed(0.0);
-        noise.add(integration.getRandom());
-        noiseRandomIndex = noise.add(0u);
-        noise.add(dynamics.failureFlag());
-        argumentsSet = true;
-    }
-    const double h = integrator.getStepSize(), tolerance = integrator.getConstraintTolerance();
-    const double friction = integrator.getFriction();
-    // LangevinMiddle: kick and projection, half drift and reset, noise and projection, half
-    // drift and reset, projection, then the forces for the next step's kick.
+    ContextSelector selector(dynamics.computeContext());
+    const double h = integrator.getStepSize(), friction = integrator.getFriction();
+    // LangevinMiddle: kick and projection, half drift and reset, noise and projection (one
+    // pass), half drift and reset and projection (a second), then the forces for the next
+    // step's kick. Without friction: kick, projection, drift, projection in one pass.
     dynamics.beginStep(context, integrator, forcesAreValid);
-    dynamics.kick(h);
-    dynamics.project(tolerance, false);
-    if (friction == 0)
-        dynamics.driftAndReset(0.0, h, tolerance);
-    else {
-        dynamics.driftAndReset(0.0, 0.5 * h, tolerance);
-        const double a = std::exp(-friction * h);
-        dynamics.setMixedArg(langevinNoise, noiseDecay, a);
-        dynamics.setMixedArg(langevinNoise, noiseScale, std::sqrt((1 - a * a) * BOLTZ * integrator.getTemperature()));
-        langevinNoise->setArg(noiseRandomIndex, (unsigned int) integration.prepareRandomNumbers(cc.getPaddedNumAtoms()));
-        langevinNoise->execute(cc.getNumAtoms());
-        dynamics.project(tolerance, false);
-        dynamics.driftAndReset(0.0, 0.5 * h, tolerance);
+    CommonRigidBodyDynamics::Pass first;
+    first.kickTime = h;
+    first.projectAfterKick = true;
+    if (friction == 0) {
+        first.driftTime = h;
+        first.projectAtEnd = true;
+        dynamics.advance(first);
     }
-    dynamics.project(tolerance, false);
+    else {
+        const double a = std::exp(-friction * h);
+        first.driftTime = 0.5 * h;
+        first.noiseDecay = a;
+        first.noiseScale = std::sqrt((1 - a * a) * BOLTZ * integrator.getTemperature());
+        dynamics.advance(first);
+        CommonRigidBodyDynamics::Pass second;
+        second.driftTime = 0.5 * h;
+        second.projectAtEnd = true;
+        dynamics.advance(second);
+    }
     dynamics.computeForces(context, integrator, forcesAreValid);
     dynamics.endStep(h, forcesAreValid);
 }

@@ -1,5 +1,5 @@
 #include "CommonRigidBodyDynamics.h"
-#include "CommonKernelArguments.h"
+#include "CommonBodyForceInfo.h"
 #include "CommonMRattleKernelSources.h"
 #include "HostRigidBodyRules.h"
 #include "RigidBodyIntegrator.h"
@@ -12,22 +12,12 @@
 #include <cmath>
 #include <functional>
 #include <map>
-#include <sstream>
 
 using namespace MRattlePlugin;
 using namespace OpenMM;
 using std::vector;
 
 namespace {
-
-/** SHAKE and RATTLE iterations allowed for a cluster of free constraints. */
-const int MaxConstraintIterations = 1000;
-/**
- * In single precision the rotation solve converges, and velocities count as rigid, at
- * float's round-off instead of double's (RigidBodyMath::ChordConvergence,
- * RigidVelocityTolerance).
- */
-const double SingleChordConvergence = 1e-6, SingleRigidVelocityTolerance = 1e-5;
 
 /** Connected groups of free constraints (union-find over their atoms). */
 vector<vector<int> > constraintClusters(const System& system, const vector<int>& constraints) {
@@ -60,14 +50,6 @@ vector<vector<int> > constraintClusters(const System& system, const vector<int>&
     return clusters;
 }
 
-/** A constant as the device code reads it: in the integration arithmetic's precision. */
-std::string mixedConstant(double value) {
-    std::ostringstream text;
-    text.precision(17);
-    text << "((mixed) " << value << ")";
-    return text.str();
-}
-
 } // namespace
 
 class CommonRigidBodyDynamics::ReorderListener : public ComputeContext::ReorderListener {
@@ -77,6 +59,7 @@ public:
     void execute() override {
         owner.mapAtoms();
         owner.atomsReordered = true;
+        owner.stepFailure.atomsReordered();
     }
 
 private:
@@ -84,13 +67,15 @@ private:
 };
 
 CommonRigidBodyDynamics::CommonRigidBodyDynamics(ComputeContext& cc, const std::string& integratorName)
-    : cc(cc), integratorName(integratorName) {
+    : cc(cc), stepFailure(cc, integratorName) {
 }
 
 CommonRigidBodyDynamics::~CommonRigidBodyDynamics() {
 }
 
 void CommonRigidBodyDynamics::initialize(const System& system, const RigidBodyTopology& topology) {
+    // Whole bodies across reorderings: OpenMM builds its molecules once, when it initializes.
+    cc.addForce(new CommonBodyForceInfo(topology.getBodies()));
     cc.initializeContexts();
     bodies = topology;
     numBodies = bodies.getNumBodies();
@@ -106,7 +91,10 @@ void CommonRigidBodyDynamics::initialize(const System& system, const RigidBodyTo
         starts.push_back(systemBodyAtoms.size());
     }
     vector<double> distances;
-    vector<int> clusterStarts = {0};
+    vector<int> clusterStarts = {0}, clusterAtomStarts = {0};
+    vector<bool> grouped(system.getNumParticles(), false);
+    for (int atom : systemBodyAtoms)
+        grouped[atom] = true;
     for (const vector<int>& cluster : constraintClusters(system, bodies.getFreeConstraints())) {
         for (int c : cluster) {
             int p1, p2;
@@ -115,69 +103,63 @@ void CommonRigidBodyDynamics::initialize(const System& system, const RigidBodyTo
             systemConstraintAtoms.push_back(p1);
             systemConstraintAtoms.push_back(p2);
             distances.push_back(distance);
+            for (int atom : {p1, p2})
+                if (!grouped[atom]) {
+                    grouped[atom] = true;
+                    systemClusterAtoms.push_back(atom);
+                }
         }
         clusterStarts.push_back(distances.size());
+        clusterAtomStarts.push_back(systemClusterAtoms.size());
     }
     numClusters = clusterStarts.size() - 1;
+    // Every other particle moves alone (massless ones too: the step's backup holds them).
+    for (int atom = 0; atom < system.getNumParticles(); atom++)
+        if (!grouped[atom])
+            systemFreeAtoms.push_back(atom);
+    numFree = systemFreeAtoms.size();
     const bool doubleMixed = cc.getUseDoublePrecision() || cc.getUseMixedPrecision();
     const int mixedSize = doubleMixed ? sizeof(double) : sizeof(float);
-    const int vectorSize = doubleMixed ? sizeof(mm_double4) : sizeof(mm_float4);
     bodyStart.initialize<int>(cc, starts.size(), "mrattleBodyStart");
     bodyStart.upload(starts);
     bodyAtoms.initialize<int>(cc, std::max<size_t>(1, systemBodyAtoms.size()), "mrattleBodyAtoms");
-    bodyLinear.initialize<int>(cc, std::max(1, numBodies), "mrattleBodyLinear");
-    bodyLinear.upload(vector<int>(std::max(1, numBodies), 0));
+    bodyShape.initialize<int>(cc, std::max(1, numBodies), "mrattleBodyShape");
+    bodyShape.upload(vector<int>(std::max(1, numBodies), shapeCode(RigidBodyMath::Shape::General)));
     clusterStart.initialize<int>(cc, clusterStarts.size(), "mrattleClusterStart");
     clusterStart.upload(clusterStarts);
     constraintAtoms.initialize<mm_int2>(cc, std::max<size_t>(1, distances.size()), "mrattleConstraintAtoms");
     constraintDistance.initialize(cc, std::max<size_t>(1, distances.size()), mixedSize, "mrattleConstraintDistance");
     if (!distances.empty())
         constraintDistance.upload(distances, true);
-    newVelocity.initialize(cc, cc.getPaddedNumAtoms(), vectorSize, "mrattleNewVelocity");
-    failure.initialize<int>(cc, 1, "mrattleFailure");
-    failure.upload(vector<int>(1, 0));
-    // The state at the start of each step, put back if the step fails.
-    posqBackup.initialize(cc, cc.getPaddedNumAtoms(), cc.getPosq().getElementSize(), "mrattlePosqBackup");
-    if (cc.getUseMixedPrecision())
-        correctionBackup.initialize(cc, cc.getPaddedNumAtoms(), cc.getPosq().getElementSize(), "mrattleCorrectionBackup");
-    velmBackup.initialize(cc, cc.getPaddedNumAtoms(), vectorSize, "mrattleVelmBackup");
+    clusterAtomStart.initialize<int>(cc, clusterAtomStarts.size(), "mrattleClusterAtomStart");
+    clusterAtomStart.upload(clusterAtomStarts);
+    clusterAtoms.initialize<int>(cc, std::max<size_t>(1, systemClusterAtoms.size()), "mrattleClusterAtoms");
+    freeAtoms.initialize<int>(cc, std::max<size_t>(1, systemFreeAtoms.size()), "mrattleFreeAtoms");
+    bodyReference.initialize(cc, std::max<size_t>(1, systemBodyAtoms.size()),
+                             doubleMixed ? sizeof(mm_double4) : sizeof(mm_float4), "mrattleBodyReference");
+    bodyReference.upload(vector<mm_double4>(bodyReference.getSize(), mm_double4(0, 0, 0, 0)), true);
+    bodyOrientation.initialize(cc, 9 * std::max(1, numBodies), mixedSize, "mrattleBodyOrientation");
+    bodyOrientation.upload(identityOrientations(), true);
+    stepFailure.initialize();
     mapAtoms();
     cc.addReorderListener(new ReorderListener(*this));
     bodyKineticEnergy.reset(new CommonBodyKineticEnergy(cc, numBodies, bodyStart, bodyAtoms));
     for (int f = 0; f < system.getNumForces(); f++)
         if (const AndersenThermostat* thermostat = dynamic_cast<const AndersenThermostat*>(&system.getForce(f))) {
             hasAndersen = true;
-            cc.getIntegrationUtilities().initRandomNumberGenerator(thermostat->getRandomNumberSeed());
+            initRandomNumbers(thermostat->getRandomNumberSeed());
         }
     program = compileWith(hasAndersen ? CommonMRattleKernelSources::collisions : "");
-    kickAndDrift = program->createKernel("kickAndDrift");
-    resetBodies = program->createKernel("resetBodies");
-    constrainFreePositions = program->createKernel("constrainFreePositions");
-    applyPositionStep = program->createKernel("applyPositionStep");
-    kickVelocities = program->createKernel("kickVelocities");
+    advanceGroups = program->createKernel("advanceGroups");
     projectBodies = program->createKernel("projectBodies");
     constrainFreeVelocities = program->createKernel("constrainFreeVelocities");
-    backupState = program->createKernel("backupState");
     if (hasAndersen)
         collideBodies = program->createKernel("collideBodies");
 }
 
-ComputeProgram CommonRigidBodyDynamics::compileWith(const std::string& sources) {
-    const bool doublePrecision = cc.getUseDoublePrecision() || cc.getUseMixedPrecision();
-    std::map<std::string, std::string> defines;
-    if (doublePrecision)
-        defines["USE_DOUBLE_MIXED"] = "1";
-    defines["MAX_ROTATION_ITERATIONS"] = std::to_string(RigidBodyMath::MaxRotationIterations);
-    defines["MAX_CONSTRAINT_ITERATIONS"] = std::to_string(MaxConstraintIterations);
-    defines["CHORD_CONVERGED"] = mixedConstant(doublePrecision ? RigidBodyMath::ChordConvergence : SingleChordConvergence);
-    defines["CHORD_SWITCH"] = mixedConstant(RigidBodyMath::ChordSwitch);
-    defines["RIGID_TOLERANCE"] =
-        mixedConstant(doublePrecision ? RigidBodyMath::RigidVelocityTolerance : SingleRigidVelocityTolerance);
-    defines["COLLISION_THRESHOLD"] = mixedConstant(RigidBodyMath::CollisionThreshold);
-    return cc.compileProgram(CommonMRattleKernelSources::bodyMath + CommonMRattleKernelSources::rotation +
-                                 CommonMRattleKernelSources::step + CommonMRattleKernelSources::freeConstraints +
-                                 CommonMRattleKernelSources::projection + sources,
-                             defines);
+void CommonRigidBodyDynamics::initRandomNumbers(int seed) {
+    cc.getIntegrationUtilities().initRandomNumberGenerator(seed);
+    hasRandomNumbers = true;
 }
 
 void CommonRigidBodyDynamics::mapAtoms() {
@@ -192,12 +174,17 @@ void CommonRigidBodyDynamics::mapAtoms() {
             return;
         deviceIndex[order[i]] = i;
     }
-    if (!systemBodyAtoms.empty()) {
-        vector<int> atoms(systemBodyAtoms.size());
+    auto upload = [&](const vector<int>& systemAtoms, ComputeArray& array) {
+        if (systemAtoms.empty())
+            return;
+        vector<int> atoms(systemAtoms.size());
         for (size_t k = 0; k < atoms.size(); k++)
-            atoms[k] = deviceIndex[systemBodyAtoms[k]];
-        bodyAtoms.upload(atoms);
-    }
+            atoms[k] = deviceIndex[systemAtoms[k]];
+        array.upload(atoms);
+    };
+    upload(systemBodyAtoms, bodyAtoms);
+    upload(systemClusterAtoms, clusterAtoms);
+    upload(systemFreeAtoms, freeAtoms);
     if (!systemConstraintAtoms.empty()) {
         vector<mm_int2> atoms(systemConstraintAtoms.size() / 2);
         for (size_t k = 0; k < atoms.size(); k++)
@@ -206,135 +193,11 @@ void CommonRigidBodyDynamics::mapAtoms() {
     }
 }
 
-void CommonRigidBodyDynamics::addMixedArg(ComputeKernel& kernel, double value) const {
-    if (cc.getUseDoublePrecision() || cc.getUseMixedPrecision())
-        kernel->addArg(value);
-    else
-        kernel->addArg((float) value);
-}
-
-void CommonRigidBodyDynamics::setMixedArg(ComputeKernel& kernel, int index, double value) const {
-    if (cc.getUseDoublePrecision() || cc.getUseMixedPrecision())
-        kernel->setArg(index, value);
-    else
-        kernel->setArg(index, (float) value);
-}
-
-void CommonRigidBodyDynamics::setKernelArguments() {
-    IntegrationUtilities& integration = cc.getIntegrationUtilities();
-    ArrayInterface& posq = cc.getPosq();
-    // Only mixed precision has position corrections; the others pass posq in their place, unread.
-    ArrayInterface& correction = cc.getUseMixedPrecision() ? cc.getPosqCorrection() : cc.getPosq();
-    const int numAtoms = cc.getNumAtoms(), padded = cc.getPaddedNumAtoms();
-    const bool doubleMixed = cc.getUseDoublePrecision() || cc.getUseMixedPrecision();
-
-    CommonKernelArguments drift(kickAndDrift, doubleMixed);
-    drift.add(numAtoms);
-    drift.add(padded);
-    kickAndDriftKickTime = drift.addMixed(0.0);
-    kickAndDriftDriftTime = drift.addMixed(0.0);
-    drift.add(cc.getVelm());
-    drift.add(cc.getLongForceBuffer());
-    drift.add(integration.getPosDelta());
-    drift.add(newVelocity);
-    drift.add(failure);
-
-    CommonKernelArguments reset(resetBodies, doubleMixed);
-    reset.add(numBodies);
-    reset.add(bodyStart);
-    reset.add(bodyAtoms);
-    reset.add(bodyLinear);
-    resetBodiesDriftTime = reset.addMixed(0.0);
-    reset.add(posq);
-    reset.add(correction);
-    reset.add(integration.getPosDelta());
-    reset.add(newVelocity);
-    reset.add(failure);
-
-    CommonKernelArguments freePositions(constrainFreePositions, doubleMixed);
-    freePositions.add(numClusters);
-    freePositions.add(clusterStart);
-    freePositions.add(constraintAtoms);
-    freePositions.add(constraintDistance);
-    freePositionsDriftTime = freePositions.addMixed(0.0);
-    freePositions.add(posq);
-    freePositions.add(correction);
-    freePositions.add(integration.getPosDelta());
-    freePositions.add(newVelocity);
-    freePositionsTolerance = freePositions.addMixed(0.0);
-    freePositions.add(failure);
-
-    CommonKernelArguments apply(applyPositionStep, doubleMixed);
-    apply.add(numAtoms);
-    apply.add(posq);
-    apply.add(correction);
-    apply.add(cc.getVelm());
-    apply.add(integration.getPosDelta());
-    apply.add(newVelocity);
-    apply.add(failure);
-
-    CommonKernelArguments kicks(kickVelocities, doubleMixed);
-    kicks.add(numAtoms);
-    kicks.add(padded);
-    kickVelocitiesTime = kicks.addMixed(0.0);
-    kicks.add(cc.getVelm());
-    kicks.add(cc.getLongForceBuffer());
-    kicks.add(failure);
-
-    CommonKernelArguments projection(projectBodies, doubleMixed);
-    projection.add(numBodies);
-    projection.add(bodyStart);
-    projection.add(bodyAtoms);
-    projection.add(bodyLinear);
-    projection.add(posq);
-    projection.add(correction);
-    projection.add(cc.getVelm());
-    projectOnlyIfNotRigid = projection.add(0);
-    projection.add(failure);
-
-    CommonKernelArguments freeVelocities(constrainFreeVelocities, doubleMixed);
-    freeVelocities.add(numClusters);
-    freeVelocities.add(clusterStart);
-    freeVelocities.add(constraintAtoms);
-    freeVelocities.add(posq);
-    freeVelocities.add(correction);
-    freeVelocities.add(cc.getVelm());
-    freeVelocitiesTolerance = freeVelocities.addMixed(0.0);
-    freeVelocities.add(failure);
-
-    CommonKernelArguments backup(backupState, doubleMixed);
-    backup.add(numAtoms);
-    backup.add(posq);
-    backup.add(correction);
-    backup.add(cc.getVelm());
-    backup.add(posqBackup);
-    backup.add(cc.getUseMixedPrecision() ? correctionBackup : posqBackup);
-    backup.add(velmBackup);
-    backup.add(failure);
-
-    if (hasAndersen) {
-        CommonKernelArguments collide(collideBodies, doubleMixed);
-        collide.add(numBodies);
-        collide.add(bodyStart);
-        collide.add(bodyAtoms);
-        collide.add(bodyLinear);
-        collide.add(posq);
-        collide.add(correction);
-        collide.add(cc.getVelm());
-        collideKT = collide.addMixed(0.0);
-        collide.add(integration.getRandom());
-        collideRandomIndex = collide.add(0u);
-        collide.add(failure);
-    }
-    argumentsSet = true;
-}
-
 void CommonRigidBodyDynamics::beginStep(ContextImpl& context, const RigidBodyIntegrator& integrator,
                                         bool& forcesAreValid) {
     if (!argumentsSet)
         setKernelArguments();
     cc.getIntegrationUtilities().setNextStepSize(integrator.getStepSize());
-    backupState->execute(cc.getNumAtoms());
     if (hasAndersen && numBodies > 0) {
         // The thermostat (updateContextState) re-drew single atoms: re-draw their whole bodies.
         IntegrationUtilities& integration = cc.getIntegrationUtilities();
@@ -343,6 +206,10 @@ void CommonRigidBodyDynamics::beginStep(ContextImpl& context, const RigidBodyInt
         collideBodies->execute(numBodies);
         project(integrator.getConstraintTolerance(), true);
     }
+    // The step's first pass backs up the state (after the collisions: their velocities are
+    // the step's start), with the step's index for the failure flag.
+    backupStepIndex = stepFailure.stepStarted(context, integrator.getStepSize());
+    tolerance = integrator.getConstraintTolerance();
     if (atomsReordered)
         forcesAreValid = false;  // computed for the atoms' old order
     atomsReordered = false;
@@ -350,30 +217,50 @@ void CommonRigidBodyDynamics::beginStep(ContextImpl& context, const RigidBodyInt
         context.calcForcesAndEnergy(true, false, integrator.getIntegrationForceGroups());
 }
 
+void CommonRigidBodyDynamics::advance(const Pass& pass) {
+    if (!argumentsSet)
+        setKernelArguments();
+    const int numGroups = numBodies + numClusters + numFree;
+    advanceGroups->setArg(advanceBackupIndex, backupStepIndex);
+    setMixedArg(advanceGroups, advanceKickTime, pass.kickTime);
+    advanceGroups->setArg(advanceProjectAfterKick, pass.projectAfterKick ? 1 : 0);
+    setMixedArg(advanceGroups, advanceDriftTime, pass.driftTime);
+    setMixedArg(advanceGroups, advanceTolerance, tolerance);
+    setMixedArg(advanceGroups, advanceNoiseDecay, pass.noiseDecay);
+    setMixedArg(advanceGroups, advanceNoiseScale, pass.noiseScale);
+    if (pass.noiseScale != 0)
+        advanceGroups->setArg(advanceRandomIndex,
+                              (unsigned int) cc.getIntegrationUtilities().prepareRandomNumbers(cc.getPaddedNumAtoms()));
+    advanceGroups->setArg(advanceProjectAtEnd, pass.projectAtEnd ? 1 : 0);
+    if (numGroups > 0)
+        advanceGroups->execute(numGroups);
+    backupStepIndex = -1;  // once per step
+}
+
 void CommonRigidBodyDynamics::driftAndReset(double kickTime, double h, double tolerance) {
-    setMixedArg(kickAndDrift, kickAndDriftKickTime, kickTime);
-    setMixedArg(kickAndDrift, kickAndDriftDriftTime, h);
-    kickAndDrift->execute(cc.getNumAtoms());
-    if (numBodies > 0) {
-        setMixedArg(resetBodies, resetBodiesDriftTime, h);
-        resetBodies->execute(numBodies);
-    }
-    if (numClusters > 0) {
-        setMixedArg(constrainFreePositions, freePositionsDriftTime, h);
-        setMixedArg(constrainFreePositions, freePositionsTolerance, tolerance);
-        constrainFreePositions->execute(numClusters);
-    }
-    applyPositionStep->execute(cc.getNumAtoms());
+    this->tolerance = tolerance;
+    Pass pass;
+    pass.kickTime = kickTime;
+    pass.driftTime = h;
+    advance(pass);
 }
 
 void CommonRigidBodyDynamics::kick(double time) {
-    setMixedArg(kickVelocities, kickVelocitiesTime, time);
-    kickVelocities->execute(cc.getNumAtoms());
+    Pass pass;
+    pass.kickTime = time;
+    advance(pass);
 }
 
 void CommonRigidBodyDynamics::project(double tolerance, bool onlyIfNotRigid) {
     if (!argumentsSet)
         setKernelArguments();
+    if (backupStepIndex >= 0 && !onlyIfNotRigid) {
+        this->tolerance = tolerance;
+        Pass pass;  // the step's first pass: it backs up the state
+        pass.projectAtEnd = true;
+        advance(pass);
+        return;
+    }
     if (numBodies > 0) {
         projectBodies->setArg(projectOnlyIfNotRigid, onlyIfNotRigid ? 1 : 0);
         projectBodies->execute(numBodies);
@@ -391,25 +278,7 @@ void CommonRigidBodyDynamics::computeForces(ContextImpl& context, const RigidBod
     context.calcForcesAndEnergy(true, false, integrator.getIntegrationForceGroups());
 }
 
-void CommonRigidBodyDynamics::checkStep() {
-    int value = 0;
-    failure.download(&value);
-    if (value == 0)
-        return;
-    // Every kernel did nothing once the failure was recorded: put back the step's start.
-    posqBackup.copyTo(cc.getPosq());
-    if (cc.getUseMixedPrecision())
-        correctionBackup.copyTo(cc.getPosqCorrection());
-    velmBackup.copyTo(cc.getVelm());
-    failure.upload(vector<int>(1, 0));
-    throw OpenMMException(integratorName + ": at step " + std::to_string(cc.getStepCount()) +
-                          " the position reset of a rigid body found no rotation, the free-particle constraints did "
-                          "not converge, or a velocity was not finite: the step size is too large for the forces, or "
-                          "they are not finite. The Context holds the state from before that step.");
-}
-
 void CommonRigidBodyDynamics::endStep(double stepSize, bool& forcesAreValid) {
-    checkStep();
     forcesAreValid = true;
     cc.setTime(cc.getTime() + stepSize);
     cc.setStepCount(cc.getStepCount() + 1);
@@ -417,48 +286,11 @@ void CommonRigidBodyDynamics::endStep(double stepSize, bool& forcesAreValid) {
     cc.reorderAtoms();
     if (atomsReordered)
         forcesAreValid = false;
+    stepFailure.stepQueued();
 }
 
-double CommonRigidBodyDynamics::storageError(ContextImpl& context, const vector<Vec3>& positions) const {
-    // Relative round-off of a stored coordinate: double, or float (mixed precision too: OpenMM
-    // 7.7 stores positions set from the host without their float correction, measured).
-    const double roundoff = cc.getUseDoublePrecision() ? std::ldexp(1.0, -53) : std::ldexp(1.0, -24);
-    // OpenMM stores coordinates shifted into the periodic box: up to a box length more.
-    Vec3 a, b, c;
-    context.getPeriodicBoxVectors(a, b, c);
-    double largest = std::sqrt(std::max(a.dot(a), std::max(b.dot(b), c.dot(c))));
-    double coordinate = 0;
-    for (const Vec3& x : positions)
-        coordinate = std::max(coordinate, std::max(std::fabs(x[0]), std::max(std::fabs(x[1]), std::fabs(x[2]))));
-    return roundoff * (coordinate + largest);
-}
-
-void CommonRigidBodyDynamics::updateShapes(ContextImpl& context) {
-    if (writingCorrectedShapes)
-        return;  // the positions this call itself is writing: classified below, once written
-    // Positions were just uploaded from the host: classify on the host with the core.
-    vector<Vec3> positions;
-    context.getPositions(positions);
-    HostRigidBodyRules::requireFinite(positions, "position");
-    if (shapeConstraints->apply(positions, storageError(context, positions))) {
-        // Back to the device, once: the correction is left alone by its own notification,
-        // and a body on its geometry to the storage's precision is not corrected again.
-        writingCorrectedShapes = true;
-        try {
-            context.setPositions(positions);
-        } catch (...) {
-            writingCorrectedShapes = false;
-            throw;
-        }
-        writingCorrectedShapes = false;
-        context.getPositions(positions);
-    }
-    shapes = HostRigidBodyRules::classifyShapes(bodies, positions);
-    // The device's shape codes (kernels/bodyMath.cc): 0 general, 1 linear, 2 a point (no rotation).
-    vector<int> flags(std::max(1, numBodies), 0);
-    for (int b = 0; b < numBodies; b++)
-        flags[b] = (shapes[b] == RigidBodyMath::Shape::General ? 0 : shapes[b] == RigidBodyMath::Shape::Linear ? 1 : 2);
-    bodyLinear.upload(flags);
+void CommonRigidBodyDynamics::finishSteps() {
+    stepFailure.synchronize();
 }
 
 void CommonRigidBodyDynamics::projectVelocities(ContextImpl& context, double tolerance) {
@@ -491,10 +323,12 @@ vector<Vec3> CommonRigidBodyDynamics::velocitiesForTemperature(ContextImpl& cont
 }
 
 double CommonRigidBodyDynamics::kineticEnergy() {
+    stepFailure.synchronize();
     return cc.getIntegrationUtilities().computeKineticEnergy(0.0);
 }
 
 void CommonRigidBodyDynamics::kineticEnergies(double& translational, double& rotational, double& free) {
+    stepFailure.synchronize();
     bodyKineticEnergy->compute(translational, rotational, free);
 }
 
@@ -502,16 +336,3 @@ int CommonRigidBodyDynamics::bodyDegreesOfFreedom() const {
     return HostRigidBodyRules::bodyDegreesOfFreedom(shapes);
 }
 
-void CommonRigidBodyDynamics::createCheckpoint(std::ostream& stream) const {
-    // The random stream (Andersen collisions, Langevin noise) is OpenMM's
-    // IntegrationUtilities', which OpenMM's own part of the checkpoint holds: no state here.
-    HostRigidBodyRules::writeKernelState(stream, "");
-}
-
-void CommonRigidBodyDynamics::loadCheckpoint(std::istream& stream) {
-    const std::string state = HostRigidBodyRules::readKernelState(stream);
-    if (!state.empty())
-        throw OpenMMException("the checkpoint's kernel data is not this platform's (a state of " +
-                              std::to_string(state.size()) + " bytes where none is expected)");
-    failure.upload(vector<int>(1, 0));
-}

@@ -37,6 +37,11 @@ public:
      *                      positions are set again (the correction is idempotent)
      */
     bool apply(std::vector<OpenMM::Vec3>& positions, double storageError = 0) const;
+    /**
+     * The same for every constrained body however close it is (to OpenMM's constraint
+     * accuracy, 1e-10): the exact shape a device platform keeps as a body's reference.
+     */
+    bool applyExactly(std::vector<OpenMM::Vec3>& positions) const;
     /** The largest error of a body's shape constraints at these positions, relative to Tolerance plus the storage allowance. */
     double error(const std::vector<OpenMM::Vec3>& positions, int body, double storageError = 0) const;
     /** Relative constraint error above which a body's shape is corrected (OpenMM 7.7's SETTLE is good to ~3e-8). */
@@ -52,8 +57,8 @@ public:
 private:
     /** Place the atoms of each near-linear body on its axis; true if any moved. */
     bool straighten(std::vector<OpenMM::Vec3>& positions) const;
-    /** The constraint-geometry correction alone. */
-    bool applyConstraints(std::vector<OpenMM::Vec3>& positions, double storageError) const;
+    /** The constraint-geometry correction alone (of every constrained body if all). */
+    bool applyConstraints(std::vector<OpenMM::Vec3>& positions, double storageError, bool all = false) const;
     RigidBodyTopology topology;
     std::vector<double> inverseMasses;
     std::unique_ptr<OpenMM::ReferenceConstraints> constraints;

@@ -60,6 +60,11 @@ bool BodyShapeConstraints::apply(vector<Vec3>& positions, double storageError) c
     return straighten(positions) || constrained;
 }
 
+bool BodyShapeConstraints::applyExactly(vector<Vec3>& positions) const {
+    const bool constrained = applyConstraints(positions, 0, true);
+    return straighten(positions) || constrained;
+}
+
 bool BodyShapeConstraints::straighten(vector<Vec3>& positions) const {
     const double* x = reinterpret_cast<const double*>(positions.data());
     bool changed = false;
@@ -83,7 +88,7 @@ bool BodyShapeConstraints::straighten(vector<Vec3>& positions) const {
     return changed;
 }
 
-bool BodyShapeConstraints::applyConstraints(vector<Vec3>& positions, double storageError) const {
+bool BodyShapeConstraints::applyConstraints(vector<Vec3>& positions, double storageError, bool all) const {
     if (!constraints)
         return false;
     // Only bodies clearly off their geometry (a PDB file's waters are off by ~1e-3) move:
@@ -92,7 +97,7 @@ bool BodyShapeConstraints::applyConstraints(vector<Vec3>& positions, double stor
     vector<char> off(topology.getNumBodies(), 0);
     bool anyOff = false;
     for (int body = 0; body < topology.getNumBodies(); body++)
-        if (!constraintsOfBody[body].empty() && error(positions, body, storageError) > Tolerance)
+        if (!constraintsOfBody[body].empty() && (all || error(positions, body, storageError) > Tolerance))
             anyOff = off[body] = 1;
     if (!anyOff)
         return false;

@@ -7,15 +7,19 @@
  * arithmetic is in 'mixed' precision (double in the mixed and double modes). Constants
  * shared with the host (iteration limits, tolerances) come from the host as defines.
  *
- * failure[0] holds 0, or 1 once a reset, a constraint or a velocity of this step
- * failed: every kernel that would change the state then does nothing; the host reads it
- * at the end of every step and puts back the state from before that step.
+ * failure[0] holds 0, or 1 once a reset, a constraint or a velocity of a step failed:
+ * every kernel that would change the state then does nothing, until the host finds it (one
+ * step late, or at the end of step(n): CommonStepFailure.h) and puts back the state from
+ * before that step, whose index backupState keeps in failure[1].
  */
 
-/* A body's shape, as the host classifies it when positions are set (bodyLinear[body]). */
-#define SHAPE_GENERAL 0
-#define SHAPE_LINEAR 1
-#define SHAPE_POINT 2  /* only translates: no rotation is solved or kept */
+/*
+ * A body's shape, as the host classifies it when positions are set (bodyShape[body]):
+ * SHAPE_GENERAL, SHAPE_LINEAR or SHAPE_POINT (only translates: no rotation is solved or
+ * kept), defined by the host from RigidBodyMath::Shape. FINITE_BOUND, also the host's: a
+ * squared velocity, a squared centre or a rotation vector's length beyond it counts as not
+ * finite (NaN fails every comparison).
+ */
 
 typedef struct {
     mixed m00, m01, m02, m10, m11, m12, m20, m21, m22;
@@ -98,9 +102,13 @@ DEVICE Matrix3 inertiaOf(Matrix3 J, mixed traceJ) {
     return I;
 }
 
-/** A velocity whose square is finite and below 1e30 (NaN fails every comparison). */
+/**
+ * A velocity that is finite and below LARGEST_SPEED (NaN fails every comparison): OpenMM
+ * sums device forces in fixed point, where an infinite force becomes the largest number it
+ * holds (about 2e9 kJ/mol/nm), which kicks any atom far beyond that speed.
+ */
 DEVICE bool isFiniteVelocity(mixed4 v) {
-    return v.x*v.x + v.y*v.y + v.z*v.z <= 1e30f;
+    return v.x*v.x + v.y*v.y + v.z*v.z <= LARGEST_SPEED*LARGEST_SPEED;
 }
 
 /** Every work item of one launch that fails writes the same value, so no atomic is needed. */

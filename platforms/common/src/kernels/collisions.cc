@@ -8,7 +8,7 @@
  * (See bodyMath.cc for the program's layout and the failure flag.)
  */
 KERNEL void collideBodies(int numBodies, GLOBAL const int* RESTRICT bodyStart, GLOBAL const int* RESTRICT bodyAtoms,
-        GLOBAL const int* RESTRICT bodyLinear, GLOBAL const real4* RESTRICT posq,
+        GLOBAL const int* RESTRICT bodyShape, GLOBAL const real4* RESTRICT posq,
         GLOBAL const real4* RESTRICT posqCorrection, GLOBAL mixed4* RESTRICT velm, mixed kT,
         GLOBAL const float4* RESTRICT random, unsigned int randomIndex, GLOBAL const int* RESTRICT failure) {
     if (failure[0] != 0)
@@ -16,7 +16,7 @@ KERNEL void collideBodies(int numBodies, GLOBAL const int* RESTRICT bodyStart, G
     for (int body = GLOBAL_ID; body < numBodies; body += GLOBAL_SIZE) {
         const int start = bodyStart[body], end = bodyStart[body+1];
         mixed residual, scale;
-        rigidMotion(start, end, bodyAtoms, bodyLinear[body], posq, posqCorrection, velm, &residual, &scale);
+        rigidMotion(start, end, bodyAtoms, bodyShape[body], posq, posqCorrection, velm, &residual, &scale);
         if (!(residual > COLLISION_THRESHOLD*COLLISION_THRESHOLD*scale || (scale == 0 && residual > 0)))
             continue;  // still rigid: no atom of it collided
         for (int k = start; k < end; k++) {

@@ -16,7 +16,7 @@ typedef struct {
  * how far they are from it: *residual is the largest |v_i - rigid_i|^2, *scale the largest
  * |rigid_i|^2.
  */
-DEVICE RigidMotion rigidMotion(int start, int end, GLOBAL const int* RESTRICT bodyAtoms, int linear,
+DEVICE RigidMotion rigidMotion(int start, int end, GLOBAL const int* RESTRICT bodyAtoms, int shape,
         GLOBAL const real4* RESTRICT posq, GLOBAL const real4* RESTRICT posqCorrection,
         GLOBAL const mixed4* RESTRICT velm, mixed* residual, mixed* scale) {
     RigidMotion motion;
@@ -38,10 +38,10 @@ DEVICE RigidMotion rigidMotion(int start, int end, GLOBAL const int* RESTRICT bo
     }
     motion.omega = make_mixed3(0, 0, 0);
     const mixed j = J.m00 + J.m11 + J.m22;
-    if (linear == SHAPE_POINT) {
+    if (shape == SHAPE_POINT) {
         // A point only translates.
     }
-    else if (linear == SHAPE_LINEAR) {
+    else if (shape == SHAPE_LINEAR) {
         if (farthest > 0 && j > 0) {
             u *= 1/sqrt(farthest);
             motion.omega = (L - dot(L, u)*u)*(1/j);
@@ -63,27 +63,32 @@ DEVICE RigidMotion rigidMotion(int start, int end, GLOBAL const int* RESTRICT bo
 }
 
 /**
- * Replace every body's velocities by their rigid-body projection. With onlyIfNotRigid,
+ * Replace one body's velocities by their rigid-body projection. With onlyIfNotRigid,
  * velocities already rigid to round-off (RIGID_TOLERANCE) are left exactly as they are.
  */
+DEVICE void projectBody(int start, int end, GLOBAL const int* RESTRICT bodyAtoms, int shape,
+        GLOBAL const real4* RESTRICT posq, GLOBAL const real4* RESTRICT posqCorrection, GLOBAL mixed4* RESTRICT velm,
+        bool onlyIfNotRigid) {
+    mixed residual, scale;
+    const RigidMotion motion = rigidMotion(start, end, bodyAtoms, shape, posq, posqCorrection, velm, &residual, &scale);
+    if (onlyIfNotRigid && residual <= RIGID_TOLERANCE*RIGID_TOLERANCE*scale)
+        return;
+    for (int k = start; k < end; k++) {
+        const int atom = bodyAtoms[k];
+        const mixed4 v = velm[atom];
+        const mixed3 rigid = motion.V + cross(motion.omega, loadPosition(posq, posqCorrection, atom) - motion.origin - motion.center);
+        velm[atom] = make_mixed4(rigid.x, rigid.y, rigid.z, v.w);
+    }
+}
+
+/** Every body's projection (velocities set from the host, Andersen collisions). */
 KERNEL void projectBodies(int numBodies, GLOBAL const int* RESTRICT bodyStart, GLOBAL const int* RESTRICT bodyAtoms,
-        GLOBAL const int* RESTRICT bodyLinear, GLOBAL const real4* RESTRICT posq,
+        GLOBAL const int* RESTRICT bodyShape, GLOBAL const real4* RESTRICT posq,
         GLOBAL const real4* RESTRICT posqCorrection, GLOBAL mixed4* RESTRICT velm, int onlyIfNotRigid,
         GLOBAL const int* RESTRICT failure) {
     if (failure[0] != 0)
         return;
-    for (int body = GLOBAL_ID; body < numBodies; body += GLOBAL_SIZE) {
-        const int start = bodyStart[body], end = bodyStart[body+1];
-        mixed residual, scale;
-        const RigidMotion motion = rigidMotion(start, end, bodyAtoms, bodyLinear[body], posq, posqCorrection, velm,
-                                               &residual, &scale);
-        if (onlyIfNotRigid && residual <= RIGID_TOLERANCE*RIGID_TOLERANCE*scale)
-            continue;
-        for (int k = start; k < end; k++) {
-            const int atom = bodyAtoms[k];
-            const mixed4 v = velm[atom];
-            const mixed3 rigid = motion.V + cross(motion.omega, loadPosition(posq, posqCorrection, atom) - motion.origin - motion.center);
-            velm[atom] = make_mixed4(rigid.x, rigid.y, rigid.z, v.w);
-        }
-    }
+    for (int body = GLOBAL_ID; body < numBodies; body += GLOBAL_SIZE)
+        projectBody(bodyStart[body], bodyStart[body+1], bodyAtoms, bodyShape[body], posq, posqCorrection, velm,
+                    onlyIfNotRigid != 0);
 }

@@ -45,7 +45,7 @@ DEVICE bool solveRotation(Matrix3 J, mixed3 target, Matrix3* delta) {
         w -= step;
         const mixed stepSize = sqrt(step.x*step.x + step.y*step.y + step.z*step.z);
         const mixed size = sqrt(w.x*w.x + w.y*w.y + w.z*w.z);
-        if (!(size == size) || size > 1e30f)
+        if (!(size <= FINITE_BOUND))
             return false;  // not finite
         // The error left is about the step times the rate at which steps shrink.
         converged = (stepSize == 0 || stepSize*stepSize <= CHORD_CONVERGED*size*previousStep);

@@ -1,127 +1,174 @@
 /*
- * The step: kicks, the drift, the bodies' position reset, writing the new state, and its backup.
+ * A step's work on single atoms and on one body: its backup, kicks, drifts, the bodies'
+ * position reset, Langevin's noise. The kernel that sequences them per group of atoms is
+ * advanceGroups (advance.cc).
  *
  * (See bodyMath.cc for the program's layout and the failure flag.)
  */
 
-/**
- * Per atom: a kick over kickTime (0 for none) and a drift over h into newVelocity and posDelta (the state
- * itself is written only by applyPositionStep, once every body's reset has succeeded).
- */
-KERNEL void kickAndDrift(int numAtoms, int paddedNumAtoms, mixed kickTime, mixed h,
-        GLOBAL const mixed4* RESTRICT velm, GLOBAL const mm_long* RESTRICT force, GLOBAL mixed4* RESTRICT posDelta,
-        GLOBAL mixed4* RESTRICT newVelocity, GLOBAL int* RESTRICT failure) {
-    if (failure[0] != 0)
+/** Write a position in the storage's precision (mixed: a float and its correction). */
+DEVICE void storePosition(GLOBAL real4* RESTRICT posq, GLOBAL real4* RESTRICT posqCorrection, int atom, mixed3 pos) {
+    const real4 p = posq[atom];
+#ifdef USE_MIXED_PRECISION
+    posq[atom] = make_real4((real) pos.x, (real) pos.y, (real) pos.z, p.w);
+    posqCorrection[atom] = make_real4(pos.x-(real) pos.x, pos.y-(real) pos.y, pos.z-(real) pos.z, 0);
+#else
+    posq[atom] = make_real4(pos.x, pos.y, pos.z, p.w);
+#endif
+}
+
+/** Copy an atom's state into the step's backup (put back if the step fails). */
+DEVICE void backupAtom(int atom, GLOBAL const real4* RESTRICT posq, GLOBAL const real4* RESTRICT posqCorrection,
+        GLOBAL const mixed4* RESTRICT velm, GLOBAL real4* RESTRICT posqBackup, GLOBAL real4* RESTRICT correctionBackup,
+        GLOBAL mixed4* RESTRICT velmBackup) {
+    posqBackup[atom] = posq[atom];
+#ifdef USE_MIXED_PRECISION
+    correctionBackup[atom] = posqCorrection[atom];
+#endif
+    velmBackup[atom] = velm[atom];
+}
+
+/** A kick of one atom's velocity with the Context's forces; false if the velocity is then not finite. */
+DEVICE bool kickAtom(int atom, mixed scale, GLOBAL const mm_long* RESTRICT force, int paddedNumAtoms,
+        GLOBAL mixed4* RESTRICT velm) {
+    mixed4 velocity = velm[atom];
+    if (velocity.w == 0)
+        return true;
+    velocity = kicked(velocity, scale, force, atom, paddedNumAtoms);
+    velm[atom] = velocity;
+    return isFiniteVelocity(velocity);  // not finite: the forces are not (NaN fails every comparison)
+}
+
+/** A free atom's drift over h. */
+DEVICE void driftAtom(int atom, mixed h, GLOBAL real4* RESTRICT posq, GLOBAL real4* RESTRICT posqCorrection,
+        GLOBAL const mixed4* RESTRICT velm) {
+    const mixed4 v = velm[atom];
+    if (v.w == 0)
         return;
-    const mixed scale = kickTime/(mixed) 0x100000000;
-    for (int index = GLOBAL_ID; index < numAtoms; index += GLOBAL_SIZE) {
-        mixed4 velocity = velm[index];
-        if (velocity.w != 0) {
-            velocity = kicked(velocity, scale, force, index, paddedNumAtoms);
-            posDelta[index] = make_mixed4(h*velocity.x, h*velocity.y, h*velocity.z, 0);
-            if (!isFiniteVelocity(velocity))
-                recordFailure(failure);  // not finite (NaN fails every comparison)
+    const mixed4 delta = make_mixed4(h*v.x, h*v.y, h*v.z, 0);
+    storePosition(posq, posqCorrection, atom, loadPosition(posq, posqCorrection, atom) + make_mixed3(delta.x, delta.y, delta.z));
+}
+
+/** Langevin's Ornstein-Uhlenbeck step of one atom: v = a v + sqrt((1 - a^2) kT / m) g (noiseScale = sqrt((1 - a^2) kT)). */
+DEVICE void noiseAtom(int atom, mixed a, mixed noiseScale, GLOBAL const float4* RESTRICT random, unsigned int randomIndex,
+        GLOBAL mixed4* RESTRICT velm) {
+    const mixed4 v = velm[atom];
+    if (v.w == 0)
+        return;
+    const float4 g = random[randomIndex + atom];
+    const mixed sigma = noiseScale*sqrt(v.w);
+    velm[atom] = make_mixed4(a*v.x + sigma*g.x, a*v.y + sigma*g.y, a*v.z + sigma*g.z, v.w);
+}
+
+/** (R + R^-T) / 2: a step of Newton's iteration for the polar factor (the nearest rotation) of R. */
+DEVICE Matrix3 polarStep(Matrix3 R) {
+    Matrix3 inverse;
+    if (!inverse3(R, &inverse))
+        return R;
+    Matrix3 next;
+    next.m00 = 0.5f*(R.m00 + inverse.m00); next.m01 = 0.5f*(R.m01 + inverse.m10); next.m02 = 0.5f*(R.m02 + inverse.m20);
+    next.m10 = 0.5f*(R.m10 + inverse.m01); next.m11 = 0.5f*(R.m11 + inverse.m11); next.m12 = 0.5f*(R.m12 + inverse.m21);
+    next.m20 = 0.5f*(R.m20 + inverse.m02); next.m21 = 0.5f*(R.m21 + inverse.m12); next.m22 = 0.5f*(R.m22 + inverse.m22);
+    return next;
+}
+
+/** A body's orientation (9 numbers from orientation[9*body]). */
+DEVICE Matrix3 loadOrientation(GLOBAL const mixed* RESTRICT orientation, int body) {
+    GLOBAL const mixed* q = orientation + 9*body;
+    Matrix3 Q;
+    Q.m00 = q[0]; Q.m01 = q[1]; Q.m02 = q[2];
+    Q.m10 = q[3]; Q.m11 = q[4]; Q.m12 = q[5];
+    Q.m20 = q[6]; Q.m21 = q[7]; Q.m22 = q[8];
+    return Q;
+}
+
+DEVICE void storeOrientation(GLOBAL mixed* RESTRICT orientation, int body, Matrix3 Q) {
+    GLOBAL mixed* q = orientation + 9*body;
+    q[0] = Q.m00; q[1] = Q.m01; q[2] = Q.m02;
+    q[3] = Q.m10; q[4] = Q.m11; q[5] = Q.m12;
+    q[6] = Q.m20; q[7] = Q.m21; q[8] = Q.m22;
+}
+
+/**
+ * The body's orientation after its reset rotation P = 1 + delta: Q = P Q, made orthonormal
+ * again (one step of Newton's polar iteration, from a matrix orthonormal to round-off). Its
+ * reference geometry (reference[k] for bodyAtoms[k], about its centre of mass) turned by Q
+ * is then the body's shape, exact to round-off however many steps it takes. If the body's
+ * positions a about its centre are not Q ref (beyond STALE_REFERENCE nm: something else moved
+ * it, e.g. another integrator of a CompoundIntegrator), they become its reference, Q = 1.
+ */
+DEVICE Matrix3 turnOrientation(int body, int start, int end, GLOBAL const int* RESTRICT bodyAtoms,
+        GLOBAL mixed4* RESTRICT reference, GLOBAL mixed* RESTRICT orientation, GLOBAL const real4* RESTRICT posq,
+        GLOBAL const real4* RESTRICT posqCorrection, mixed3 origin, mixed3 center, Matrix3 delta) {
+    Matrix3 Q = loadOrientation(orientation, body);
+    mixed stale = 0;
+    for (int k = start; k < end; k++) {
+        const mixed3 a = loadPosition(posq, posqCorrection, bodyAtoms[k]) - origin - center;
+        const mixed4 q = reference[k];
+        const mixed3 d = a - apply(Q, make_mixed3(q.x, q.y, q.z));
+        stale = max(stale, dot(d, d));
+    }
+    if (!(stale <= STALE_REFERENCE*STALE_REFERENCE)) {
+        for (int k = start; k < end; k++) {
+            const mixed3 a = loadPosition(posq, posqCorrection, bodyAtoms[k]) - origin - center;
+            reference[k] = make_mixed4(a.x, a.y, a.z, 0);
+        }
+        Q = zeroMatrix();
+        Q.m00 = Q.m11 = Q.m22 = 1;
+    }
+    Matrix3 P = delta;
+    P.m00 += 1; P.m11 += 1; P.m22 += 1;
+    Q = polarStep(multiply(P, Q));
+    storeOrientation(orientation, body, Q);
+    return Q;
+}
+
+/**
+ * M-RATTLE's drift and position reset of one body over h, from its positions and velocities:
+ * the centre moves with the mean velocity, the orientation is the rotation that makes the
+ * constraint displacement exert zero torque about the old positions; the new velocities are
+ * the displacement's over h. The new positions are the body's reference geometry in its
+ * orientation (turnOrientation), so the shape is re-imposed every step as SETTLE does and
+ * float round-off cannot random-walk it. Positions are taken relative to
+ * the body's first atom so that a body far from the origin loses no digits. Returns false if
+ * no rotation was found.
+ */
+DEVICE bool resetBody(int body, int start, int end, GLOBAL const int* RESTRICT bodyAtoms, GLOBAL mixed4* RESTRICT reference,
+        GLOBAL mixed* RESTRICT orientation, int shape, mixed h, GLOBAL real4* RESTRICT posq,
+        GLOBAL real4* RESTRICT posqCorrection, GLOBAL mixed4* RESTRICT velm) {
+    mixed3 origin, center, V;
+    bodyCenterAndVelocity(start, end, bodyAtoms, posq, posqCorrection, velm, &origin, &center, &V);
+    if (!(dot(V, V) <= FINITE_BOUND && dot(center, center) <= FINITE_BOUND))
+        return false;  // inf or NaN
+    Matrix3 delta = zeroMatrix();
+    const bool converged = shape == SHAPE_POINT || (shape == SHAPE_GENERAL ?
+            solveBodyRotation(start, end, bodyAtoms, posq, posqCorrection, velm, origin, center, V, h, &delta) :
+            solveLinearBodyRotation(start, end, bodyAtoms, posq, posqCorrection, velm, origin, center, V, h, &delta));
+    if (!converged)
+        return false;
+#ifdef REBUILD_SHAPES
+    const bool fitted = (shape != SHAPE_POINT);
+#else
+    const bool fitted = false;  // double precision: no round-off worth rebuilding from
+#endif
+    const Matrix3 rotation = (fitted ? turnOrientation(body, start, end, bodyAtoms, reference, orientation, posq,
+                                                       posqCorrection, origin, center, delta) : delta);
+    const mixed3 shift = h*V;
+    const mixed3 newCenter = origin + (center + shift);
+    const mixed invH = 1/h;
+    for (int k = start; k < end; k++) {
+        const int atom = bodyAtoms[k];
+        const mixed3 x = loadPosition(posq, posqCorrection, atom);
+        const mixed3 turn = apply(delta, x - origin - center);
+        if (fitted) {
+            const mixed4 q = reference[k];
+            const mixed3 ref = make_mixed3(q.x, q.y, q.z);
+            storePosition(posq, posqCorrection, atom, newCenter + apply(rotation, ref));
         }
         else
-            posDelta[index] = make_mixed4(0, 0, 0, 0);
-        newVelocity[index] = velocity;
+            storePosition(posq, posqCorrection, atom, x + (shift + turn));
+        const mixed4 v = velm[atom];
+        velm[atom] = make_mixed4(V.x + turn.x*invH, V.y + turn.y*invH, V.z + turn.z*invH, v.w);
     }
-}
-
-/**
- * M-RATTLE's position reset, one work item per body: the centre moves with the mean
- * velocity, the orientation is the rotation that makes the constraint displacement exert
- * zero torque about the old positions. Positions are taken relative to the body's first
- * atom so that a body far from the origin loses no digits.
- */
-KERNEL void resetBodies(int numBodies, GLOBAL const int* RESTRICT bodyStart, GLOBAL const int* RESTRICT bodyAtoms,
-        GLOBAL const int* RESTRICT bodyLinear, mixed h, GLOBAL const real4* RESTRICT posq,
-        GLOBAL const real4* RESTRICT posqCorrection, GLOBAL mixed4* RESTRICT posDelta,
-        GLOBAL mixed4* RESTRICT newVelocity, GLOBAL int* RESTRICT failure) {
-    if (failure[0] != 0)
-        return;
-    for (int body = GLOBAL_ID; body < numBodies; body += GLOBAL_SIZE) {
-        const int start = bodyStart[body], end = bodyStart[body+1];
-        mixed3 origin, center, V;
-        bodyCenterAndVelocity(start, end, bodyAtoms, posq, posqCorrection, newVelocity, &origin, &center, &V);
-        if (!(dot(V, V) <= 1e30f && dot(center, center) <= 1e30f)) {  // inf or NaN
-            recordFailure(failure);
-            continue;
-        }
-        Matrix3 delta = zeroMatrix();
-        const bool converged = bodyLinear[body] == SHAPE_POINT || (bodyLinear[body] == SHAPE_GENERAL ?
-                solveBodyRotation(start, end, bodyAtoms, posq, posqCorrection, newVelocity, origin, center, V, h,
-                                  &delta) :
-                solveLinearBodyRotation(start, end, bodyAtoms, posq, posqCorrection, newVelocity, origin, center, V,
-                                        h, &delta));
-        if (!converged) {
-            recordFailure(failure);
-            continue;
-        }
-        const mixed3 shift = h*V;
-        const mixed invH = 1/h;
-        for (int k = start; k < end; k++) {
-            const int atom = bodyAtoms[k];
-            const mixed3 a = loadPosition(posq, posqCorrection, atom) - origin - center;
-            const mixed3 turn = apply(delta, a);
-            const mixed3 move = shift + turn;
-            posDelta[atom] = make_mixed4(move.x, move.y, move.z, 0);
-            const mixed4 v = newVelocity[atom];
-            newVelocity[atom] = make_mixed4(V.x + turn.x*invH, V.y + turn.y*invH, V.z + turn.z*invH, v.w);
-        }
-    }
-}
-
-/** Write the step's positions and velocities, unless a reset or constraint failed. */
-KERNEL void applyPositionStep(int numAtoms, GLOBAL real4* RESTRICT posq, GLOBAL real4* RESTRICT posqCorrection,
-        GLOBAL mixed4* RESTRICT velm, GLOBAL const mixed4* RESTRICT posDelta, GLOBAL const mixed4* RESTRICT newVelocity,
-        GLOBAL const int* RESTRICT failure) {
-    if (failure[0] != 0)
-        return;
-    for (int index = GLOBAL_ID; index < numAtoms; index += GLOBAL_SIZE) {
-        if (velm[index].w == 0)
-            continue;
-        const real4 p = posq[index];
-        const mixed4 delta = posDelta[index];
-        const mixed3 pos = loadPosition(posq, posqCorrection, index) + make_mixed3(delta.x, delta.y, delta.z);
-#ifdef USE_MIXED_PRECISION
-        posq[index] = make_real4((real) pos.x, (real) pos.y, (real) pos.z, p.w);
-        posqCorrection[index] = make_real4(pos.x-(real) pos.x, pos.y-(real) pos.y, pos.z-(real) pos.z, 0);
-#else
-        posq[index] = make_real4(pos.x, pos.y, pos.z, p.w);
-#endif
-        velm[index] = newVelocity[index];
-    }
-}
-
-/** Per atom: a kick over kickTime with the Context's forces; a velocity that is not finite is a failure. */
-KERNEL void kickVelocities(int numAtoms, int paddedNumAtoms, mixed kickTime,
-        GLOBAL mixed4* RESTRICT velm, GLOBAL const mm_long* RESTRICT force, GLOBAL int* RESTRICT failure) {
-    if (failure[0] != 0)
-        return;
-    const mixed scale = kickTime/(mixed) 0x100000000;
-    for (int index = GLOBAL_ID; index < numAtoms; index += GLOBAL_SIZE) {
-        mixed4 velocity = velm[index];
-        if (velocity.w != 0) {
-            velocity = kicked(velocity, scale, force, index, paddedNumAtoms);
-            velm[index] = velocity;
-            if (!isFiniteVelocity(velocity))
-                recordFailure(failure);  // the forces at the new positions are not finite
-        }
-    }
-}
-
-/** Copy the state at the start of a step, unless a failure was recorded (the copy then keeps the state before it). */
-KERNEL void backupState(int numAtoms, GLOBAL const real4* RESTRICT posq, GLOBAL const real4* RESTRICT posqCorrection,
-        GLOBAL const mixed4* RESTRICT velm, GLOBAL real4* RESTRICT posqBackup, GLOBAL real4* RESTRICT correctionBackup,
-        GLOBAL mixed4* RESTRICT velmBackup, GLOBAL const int* RESTRICT failure) {
-    if (failure[0] != 0)
-        return;
-    for (int index = GLOBAL_ID; index < numAtoms; index += GLOBAL_SIZE) {
-        posqBackup[index] = posq[index];
-#ifdef USE_MIXED_PRECISION
-        correctionBackup[index] = posqCorrection[index];
-#endif
-        velmBackup[index] = velm[index];
-    }
+    return true;
 }

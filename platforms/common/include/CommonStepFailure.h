@@ -1,0 +1,114 @@
+#ifndef MRATTLE_COMMON_STEP_FAILURE_H_
+#define MRATTLE_COMMON_STEP_FAILURE_H_
+
+#include "openmm/Vec3.h"
+#include "openmm/common/ComputeArray.h"
+#include "openmm/common/ComputeContext.h"
+#include "openmm/common/ComputeEvent.h"
+#include "openmm/common/ComputeVectorTypes.h"
+#include <string>
+#include <vector>
+
+namespace OpenMM {
+class ContextImpl;
+}
+
+namespace MRattlePlugin {
+
+/**
+ * A failed step on the device, found without a blocking read inside a step.
+ *
+ * The device's failure flag (flag()[0]) is set by the kernel that fails; every later kernel
+ * that would change the state then does nothing, and the backup kernel (the first of each
+ * step) stops copying, so the backups keep the state from before the failed step and
+ * flag()[1] the index of that step since the last check. The host learns of it lazily: at
+ * the end of each step the flag is copied into OpenMM's pinned buffer behind an event, and
+ * read at the end of the next step (one step late: the device still has that step queued).
+ * OpenMM's other users may reuse the pinned buffer in between, so what is read there is only
+ * a hint: a nonzero one is confirmed by a blocking read. The blocking check (synchronize())
+ * is made where the state can be read: at the end of each step(n), before checkpoints and
+ * kinetic energies, and at reorderings (which read the state anyway). A failure found puts
+ * back the state from before the failed step (positions, velocities, box, step count, time)
+ * and throws, naming the integrator.
+ */
+class CommonStepFailure {
+public:
+    /**
+     * A speed (nm/ps) no atom reaches in a simulation that is right (3% of light's; a
+     * hydrogen at 10^6 K moves at about 160 nm/ps): beyond it a kicked velocity counts as not
+     * finite, which is how the device sees a force that is not finite (OpenMM's fixed-point
+     * forces turn infinity into about 2e9 kJ/mol/nm; NaN into that too on x86, as through
+     * pocl, but into 0 on CUDA, where it cannot be seen).
+     */
+    static constexpr double LargestSpeed = 1e4;
+    CommonStepFailure(OpenMM::ComputeContext& cc, const std::string& integratorName);
+    /** Allocate the flag and the backups (OpenMM's arrays must exist). */
+    void initialize();
+    /** The flag: [0] nonzero once a step failed, [1] the failed step's index since the last check. */
+    OpenMM::ComputeArray& flag() {
+        return failure;
+    }
+    OpenMM::ComputeArray& posqBackup() {
+        return positions;
+    }
+    /** The position corrections' backup (mixed precision), else the positions' (unused). */
+    OpenMM::ComputeArray& correctionBackup() {
+        return cc.getUseMixedPrecision() ? corrections : positions;
+    }
+    OpenMM::ComputeArray& velmBackup() {
+        return velocities;
+    }
+    /**
+     * A step begins (before its backup kernel): returns the step's index since the last
+     * check, which the backup kernel writes into flag()[1]. The box is recorded if a
+     * barostat changed it since the last step.
+     */
+    int stepStarted(OpenMM::ContextImpl& context, double stepSize);
+    /** A step's kernels are queued: the lazy check of the previous step, then the copy of this one's flag. */
+    void stepQueued();
+    /** The blocking check: put the state back and throw if a step failed. No-op without unchecked steps. */
+    void synchronize();
+    /** Atoms were reordered (a ReorderListener): check now, the backups being in the old order. */
+    void atomsReordered();
+    /** Remember the device's order and cell offsets, which a reordering with a failure pending starts from. */
+    void rememberOrder();
+    /** Forget unchecked steps and clear the flag (a checkpoint was loaded: its state is the state). */
+    void reset();
+
+private:
+    struct BoxAtStep {
+        int step;
+        OpenMM::Vec3 box[3];
+    };
+    /** Whether the flag is set, by a blocking read. */
+    bool failed();
+    /** The state, box, step count and time before the failed step, from the backups in the current order. */
+    void restore(int failedStep);
+    /** The same after a reordering: the backups permuted on the host, the cell offsets' change undone. */
+    void restoreAcrossReorder();
+    void restoreClock(int failedStep);
+    std::string message(long long failedStepCount) const;
+    /** Forget the unchecked steps. */
+    void checked();
+
+    OpenMM::ComputeContext& cc;
+    const std::string integratorName;
+    OpenMM::ComputeArray failure, positions, corrections, velocities;
+    OpenMM::ComputeEvent copied;
+    bool copyQueued = false;
+    /** Steps since the last check, their step size, and the step count and time at it. */
+    int unchecked = 0;
+    double stepSize = 0, timeAtCheck = 0;
+    long long stepCountAtCheck = 0;
+    /** The box at each change since the last check (a barostat acts in a step's updateContextState). */
+    std::vector<BoxAtStep> boxes;
+    /** The device order and cell offsets the backups are in (rememberOrder()). */
+    std::vector<int> backupOrder;
+    std::vector<OpenMM::mm_int4> backupCellOffsets;
+    /** A failure found at a reordering, where nothing may throw: thrown by the next check. */
+    std::string deferred;
+};
+
+} // namespace MRattlePlugin
+
+#endif

@@ -1,0 +1,112 @@
+/*
+ * advanceGroups: the phases of a step fused into one launch, one work item per group of
+ * atoms that moves together: a rigid body, a cluster of free constraints, or a free atom
+ * (massless ones included, for the backup). Work items 0..numBodies-1 take the bodies,
+ * then the clusters, then the free atoms. Each phase is done if asked for, in this order:
+ *
+ *   backup (backupStepIndex >= 0; the index goes into failure[1]), kick (kickTime != 0),
+ *   projection (projectAfterKick), drift and reset (driftTime != 0: M-RATTLE's reset for a
+ *   body, SHAKE for a cluster, a drift for a free atom), Langevin noise and a projection
+ *   (noiseScale != 0), projection (projectAtEnd).
+ *
+ * A group's phases read and write only its own atoms, so no phase waits for another group.
+ * A failure of any group sets failure[0]; the host puts back the backup (CommonStepFailure).
+ *
+ * (See bodyMath.cc for the program's layout and the failure flag.)
+ */
+
+/** Group kinds. */
+#define GROUP_BODY 0
+#define GROUP_CLUSTER 1
+#define GROUP_FREE 2
+
+/** RATTLE's velocity step for one group; false if a cluster's did not converge. */
+DEVICE bool projectGroup(int kind, int index, int start, int end, GLOBAL const int* RESTRICT atoms,
+        GLOBAL const int* RESTRICT bodyShape, GLOBAL const int* RESTRICT clusterStart,
+        GLOBAL const int2* RESTRICT constraintAtoms, mixed tolerance, GLOBAL const real4* RESTRICT posq,
+        GLOBAL const real4* RESTRICT posqCorrection, GLOBAL mixed4* RESTRICT velm) {
+    if (kind == GROUP_BODY)
+        projectBody(start, end, atoms, bodyShape[index], posq, posqCorrection, velm, false);
+    else if (kind == GROUP_CLUSTER)
+        return rattleCluster(clusterStart[index], clusterStart[index+1], constraintAtoms, posq, posqCorrection, velm,
+                             tolerance);
+    return true;
+}
+
+KERNEL void advanceGroups(int numBodies, int numClusters, int numFree, GLOBAL const int* RESTRICT bodyStart,
+        GLOBAL const int* RESTRICT bodyAtoms, GLOBAL const int* RESTRICT bodyShape,
+        GLOBAL mixed4* RESTRICT bodyReference, GLOBAL mixed* RESTRICT bodyOrientation,
+        GLOBAL const int* RESTRICT clusterStart,
+        GLOBAL const int2* RESTRICT constraintAtoms,
+        GLOBAL const mixed* RESTRICT constraintDistance, GLOBAL const int* RESTRICT clusterAtomStart,
+        GLOBAL const int* RESTRICT clusterAtoms, GLOBAL const int* RESTRICT freeAtoms,
+        GLOBAL real4* RESTRICT posq, GLOBAL real4* RESTRICT posqCorrection, GLOBAL mixed4* RESTRICT velm,
+        GLOBAL const mm_long* RESTRICT force, int paddedNumAtoms, GLOBAL mixed4* RESTRICT posDelta,
+        GLOBAL real4* RESTRICT posqBackup, GLOBAL real4* RESTRICT correctionBackup, GLOBAL mixed4* RESTRICT velmBackup,
+        int backupStepIndex, mixed kickTime, int projectAfterKick, mixed driftTime, mixed tolerance, mixed noiseDecay,
+        mixed noiseScale, GLOBAL const float4* RESTRICT random, unsigned int randomIndex, int projectAtEnd,
+        GLOBAL int* RESTRICT failure) {
+    if (failure[0] != 0)
+        return;
+    if (backupStepIndex >= 0 && GLOBAL_ID == 0)
+        failure[1] = backupStepIndex;
+    const mixed kickScale = kickTime/(mixed) 0x100000000;
+    const int numGroups = numBodies + numClusters + numFree;
+    for (int group = GLOBAL_ID; group < numGroups; group += GLOBAL_SIZE) {
+        int kind, index, start, end;
+        GLOBAL const int* RESTRICT atoms;
+        if (group < numBodies) {
+            kind = GROUP_BODY;
+            index = group;
+            start = bodyStart[index];
+            end = bodyStart[index+1];
+            atoms = bodyAtoms;
+        }
+        else if (group < numBodies + numClusters) {
+            kind = GROUP_CLUSTER;
+            index = group - numBodies;
+            start = clusterAtomStart[index];
+            end = clusterAtomStart[index+1];
+            atoms = clusterAtoms;
+        }
+        else {
+            kind = GROUP_FREE;
+            index = group - numBodies - numClusters;
+            start = index;
+            end = index + 1;
+            atoms = freeAtoms;
+        }
+        bool ok = true;
+        for (int k = start; k < end; k++) {
+            const int atom = atoms[k];
+            if (backupStepIndex >= 0)
+                backupAtom(atom, posq, posqCorrection, velm, posqBackup, correctionBackup, velmBackup);
+            if (kickTime != 0)
+                ok = kickAtom(atom, kickScale, force, paddedNumAtoms, velm) && ok;
+        }
+        if (projectAfterKick)
+            ok = projectGroup(kind, index, start, end, atoms, bodyShape, clusterStart, constraintAtoms, tolerance, posq,
+                              posqCorrection, velm) && ok;
+        if (driftTime != 0) {
+            if (kind == GROUP_BODY)
+                ok = resetBody(index, start, end, atoms, bodyReference, bodyOrientation, bodyShape[index], driftTime, posq,
+                               posqCorrection, velm) && ok;
+            else if (kind == GROUP_CLUSTER)
+                ok = shakeCluster(clusterStart[index], clusterStart[index+1], constraintAtoms, constraintDistance, start,
+                                  end, atoms, driftTime, tolerance, posq, posqCorrection, velm, posDelta) && ok;
+            else
+                driftAtom(atoms[start], driftTime, posq, posqCorrection, velm);
+        }
+        if (noiseScale != 0) {
+            for (int k = start; k < end; k++)
+                noiseAtom(atoms[k], noiseDecay, noiseScale, random, randomIndex, velm);
+            ok = projectGroup(kind, index, start, end, atoms, bodyShape, clusterStart, constraintAtoms, tolerance, posq,
+                              posqCorrection, velm) && ok;
+        }
+        if (projectAtEnd)
+            ok = projectGroup(kind, index, start, end, atoms, bodyShape, clusterStart, constraintAtoms, tolerance, posq,
+                              posqCorrection, velm) && ok;
+        if (!ok)
+            recordFailure(failure);
+    }
+}
