@@ -11,7 +11,7 @@ namespace MRattlePlugin {
 class CommonIntegrateMRattleStepKernel : public CommonRigidBodyStepKernel<IntegrateMRattleStepKernel> {
 public:
     CommonIntegrateMRattleStepKernel(const std::string& name, const OpenMM::Platform& platform, OpenMM::ComputeContext& cc)
-        : CommonRigidBodyStepKernel(name, platform, cc, "MRattleIntegrator") {
+        : CommonRigidBodyStepKernel(name, platform, cc) {
     }
     void execute(OpenMM::ContextImpl& context, const MRattleIntegrator& integrator, bool& forcesAreValid) override;
 };

@@ -17,7 +17,7 @@ class CommonIntegrateMRattleLangevinStepKernel : public CommonRigidBodyStepKerne
 public:
     CommonIntegrateMRattleLangevinStepKernel(const std::string& name, const OpenMM::Platform& platform,
                                              OpenMM::ComputeContext& cc)
-        : CommonRigidBodyStepKernel(name, platform, cc, "MRattleLangevinIntegrator") {
+        : CommonRigidBodyStepKernel(name, platform, cc) {
     }
     void execute(OpenMM::ContextImpl& context, const MRattleLangevinIntegrator& integrator, bool& forcesAreValid) override;
 

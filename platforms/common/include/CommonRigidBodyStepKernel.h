@@ -18,10 +18,9 @@ template <class StepKernel>
 class CommonRigidBodyStepKernel : public StepKernel {
 public:
     typedef typename StepKernel::IntegratorType Integrator;
-    /** @param integratorName  what failures are reported as */
-    CommonRigidBodyStepKernel(const std::string& name, const OpenMM::Platform& platform, OpenMM::ComputeContext& cc,
-                              const std::string& integratorName)
-        : StepKernel(name, platform), dynamics(cc, integratorName) {
+    /** Failures are reported as the interface's IntegratorName(). */
+    CommonRigidBodyStepKernel(const std::string& name, const OpenMM::Platform& platform, OpenMM::ComputeContext& cc)
+        : StepKernel(name, platform), dynamics(cc, StepKernel::IntegratorName()) {
     }
     void initialize(const OpenMM::System& system, const RigidBodyTopology& topology,
                     const RigidBodyIntegrator& integrator) override {

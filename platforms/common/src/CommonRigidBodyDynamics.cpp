@@ -1,7 +1,9 @@
 #include "CommonRigidBodyDynamics.h"
 #include "CommonBodyForceInfo.h"
 #include "CommonMRattleKernelSources.h"
-#include "HostRigidBodyRules.h"
+#include "BodyShapes.h"
+#include "FiniteValues.h"
+#include "ThermalVelocities.h"
 #include "RigidBodyIntegrator.h"
 #include "openmm/AndersenThermostat.h"
 #include "openmm/OpenMMException.h"
@@ -297,12 +299,12 @@ void CommonRigidBodyDynamics::projectVelocities(ContextImpl& context, double tol
     // Velocities are set from the host: checking them there costs one download per set.
     vector<Vec3> velocities;
     context.getVelocities(velocities);
-    HostRigidBodyRules::requireFinite(velocities, "velocity");
+    FiniteValues::require(velocities, "velocity");
     project(tolerance, true);
     vector<Vec3> projected;
     context.getVelocities(projected);
     try {
-        HostRigidBodyRules::requireFinite(projected, "velocity projected at the current positions (a degenerate constraint?)");
+        FiniteValues::require(projected, "velocity projected at the current positions (a degenerate constraint?)");
     } catch (...) {
         context.setVelocities(velocities);
         throw;
@@ -313,11 +315,11 @@ vector<Vec3> CommonRigidBodyDynamics::velocitiesForTemperature(ContextImpl& cont
                                                                double tolerance) {
     // Maxwell-Boltzmann per particle, projected on the device (bodies and free constraints),
     // then an exact rescale to the temperature with the rigid-body degrees of freedom.
-    vector<Vec3> velocities = HostRigidBodyRules::maxwellBoltzmannVelocities(inverseMasses, temperature, randomSeed);
+    vector<Vec3> velocities = ThermalVelocities::maxwellBoltzmann(inverseMasses, temperature, randomSeed);
     context.setVelocities(velocities);
     project(tolerance, false);
     context.getVelocities(velocities);
-    HostRigidBodyRules::scaleToTemperature(bodies, inverseMasses, bodies.getNumDegreesOfFreedom(bodyDegreesOfFreedom()),
+    ThermalVelocities::scaleToTemperature(bodies, inverseMasses, bodies.getNumDegreesOfFreedom(bodyDegreesOfFreedom()),
                                            temperature, velocities);
     return velocities;
 }
@@ -333,6 +335,6 @@ void CommonRigidBodyDynamics::kineticEnergies(double& translational, double& rot
 }
 
 int CommonRigidBodyDynamics::bodyDegreesOfFreedom() const {
-    return HostRigidBodyRules::bodyDegreesOfFreedom(shapes);
+    return BodyShapes::degreesOfFreedom(shapes);
 }
 

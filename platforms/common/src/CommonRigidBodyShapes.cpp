@@ -4,10 +4,13 @@
  * checkpoints.
  */
 #include "CommonRigidBodyDynamics.h"
-#include "HostRigidBodyRules.h"
+#include "BodyShapes.h"
+#include "FiniteValues.h"
 #include "openmm/OpenMMException.h"
 #include "openmm/internal/ContextImpl.h"
 #include <algorithm>
+#include <cstdint>
+#include <iterator>
 #include <cmath>
 
 using namespace MRattlePlugin;
@@ -51,7 +54,7 @@ void CommonRigidBodyDynamics::updateShapes(ContextImpl& context) {
     // Positions were just uploaded from the host: classify on the host with the core.
     vector<Vec3> positions;
     context.getPositions(positions);
-    HostRigidBodyRules::requireFinite(positions, "position");
+    FiniteValues::require(positions, "position");
     if (shapeConstraints->apply(positions, storageError(context, positions))) {
         // Back to the device, once: the correction is left alone by its own notification,
         // and a body on its geometry to the storage's precision is not corrected again.
@@ -65,7 +68,7 @@ void CommonRigidBodyDynamics::updateShapes(ContextImpl& context) {
         writingCorrectedShapes = false;
         context.getPositions(positions);
     }
-    shapes = HostRigidBodyRules::classifyShapes(bodies, positions);
+    shapes = BodyShapes::classify(bodies, positions);
     if (keepReference)
         keepReference = false;  // a checkpoint's positions: its reference came with them
     else if (rebuildsShapes())
@@ -119,11 +122,16 @@ void CommonRigidBodyDynamics::createCheckpoint(std::ostream& stream) const {
         else
             appendShapeState<mm_float4, float>(bodyReference, bodyOrientation, values);
     }
-    HostRigidBodyRules::writeKernelState(stream, std::string((const char*) values.data(), values.size() * sizeof(double)));
+    // Unframed: the checkpoint header (RigidBodyCheckpointHeader) frames the kernel's state.
+    stream.write((const char*) values.data(), values.size() * sizeof(double));
 }
 
 void CommonRigidBodyDynamics::loadCheckpoint(std::istream& stream) {
-    const std::string state = HostRigidBodyRules::readKernelState(stream);
+    // The stream holds exactly what createCheckpoint() wrote. Checkpoints of format 3 hold
+    // the device's own 4-byte length prefix of an empty state instead: no state.
+    std::string state((std::istreambuf_iterator<char>(stream)), std::istreambuf_iterator<char>());
+    if (state == std::string(sizeof(int32_t), '\0'))
+        state.clear();
     const size_t expected = rebuildsShapes() ? (bodyReference.getSize() * 3 + bodyOrientation.getSize()) * sizeof(double) : 0;
     if (!state.empty() && state.size() != expected)
         throw OpenMMException("the checkpoint's kernel data is not this platform's (a state of " +
