@@ -1,10 +1,13 @@
 #include "TestSupport.h"
 #include "MRattleBuildInfo.h"
 #include "MRattlePlatforms.h"
+#include "MRattleBussiIntegrator.h"
 #include "MRattleLangevinIntegrator.h"
+#include "MRattleNoseHooverIntegrator.h"
 #include "RigidSplittingIntegrator.h"
 #include <gtest/gtest.h>
 #include "openmm/OpenMMException.h"
+#include "openmm/serialization/XmlSerializer.h"
 #include <cmath>
 #include <cstdlib>
 #include <mutex>
@@ -104,12 +107,19 @@ std::string unavailable(const std::string& name) {
     return reasons[name];
 }
 
+namespace {
+/** The integrators the device kernels run (the splitting baseline and the thermostats have none yet). */
+bool runsOnDevicePlatforms(const std::string& integrator) {
+    return integrator == "MRattle" || integrator == "MRattleLangevin";
+}
+} // namespace
+
 std::vector<Config> configsOf(const std::string& integrator) {
     std::vector<Config> configs;
     for (const MRattlePlugin::BuiltPlatform& built : MRattlePlugin::BuiltPlatforms) {
         // The device platforms run every integrator but the splitting baseline. One that
         // cannot run here (unavailable()) keeps its configs: their tests skip, saying why.
-        if (built.device && integrator == "RigidSplitting")
+        if (built.device && !runsOnDevicePlatforms(integrator))
             continue;
         configs.push_back({built.name, integrator});
     }
@@ -141,6 +151,14 @@ std::unique_ptr<MRattlePlugin::RigidBodyIntegrator> makeIntegrator(const std::st
         auto* langevin = new MRattlePlugin::MRattleLangevinIntegrator(300.0, 1.0, stepSize);
         langevin->setRandomNumberSeed(2024);
         return std::unique_ptr<MRattlePlugin::RigidBodyIntegrator>(langevin);
+    }
+    if (kind == "MRattleNoseHoover")  // 300 K, 10/ps, chain of 3, MTS 3, Yoshida-Suzuki 7
+        return std::unique_ptr<MRattlePlugin::RigidBodyIntegrator>(
+            new MRattlePlugin::MRattleNoseHooverIntegrator(300.0, 10.0, stepSize));
+    if (kind == "MRattleBussi") {  // 300 K, 10/ps; a fixed seed
+        auto* bussi = new MRattlePlugin::MRattleBussiIntegrator(300.0, 10.0, stepSize);
+        bussi->setRandomNumberSeed(2024);
+        return std::unique_ptr<MRattlePlugin::RigidBodyIntegrator>(bussi);
     }
     throw OpenMMException("makeIntegrator: no integrator kind '" + kind + "'");
 }
@@ -415,6 +433,27 @@ double linearSlope(const vector<double>& values) {
         variance += (i - meanIndex) * (i - meanIndex);
     }
     return covariance / variance;
+}
+
+std::string toXml(const Integrator& integrator) {
+    std::stringstream stream;
+    XmlSerializer::serialize<Integrator>(&integrator, "Integrator", stream);
+    return stream.str();
+}
+
+std::unique_ptr<Integrator> fromXml(const std::string& xml) {
+    std::stringstream stream(xml);
+    return std::unique_ptr<Integrator>(XmlSerializer::deserialize<Integrator>(stream));
+}
+
+std::string messageOfXmlWith(const std::string& xml, const std::string& original, const std::string& replacement) {
+    std::string text = xml;
+    const size_t at = text.find(original);
+    EXPECT_NE(std::string::npos, at) << "the XML has no " << original;
+    if (at == std::string::npos)
+        return "";
+    text.replace(at, original.size(), replacement);
+    return messageOf([&] { fromXml(text); });
 }
 
 } // namespace MRattleTest

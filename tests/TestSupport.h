@@ -23,7 +23,7 @@ OpenMM::Platform& platform(const std::string& name);
  */
 struct Config {
     std::string platform;    // a name from the build's list of platforms (MRattlePlatforms.h)
-    std::string integrator;  // "MRattle", "MRattleLangevin", "RigidSplitting"
+    std::string integrator;  // "MRattle", "MRattleLangevin", "RigidSplitting", "MRattleNoseHoover", "MRattleBussi"
     /** Velocity Verlet (MRattle, RigidSplitting): energy-conserving, deterministic, velocities at the positions' time. */
     bool isVerlet() const {
         return integrator != "MRattleLangevin";
@@ -55,7 +55,7 @@ std::string unavailable(const std::string& name);
     } while (0)
 /** "Reference_MRattle": a test-name suffix. */
 std::string configName(const ::testing::TestParamInfo<Config>& info);
-/** The integrator of that kind (MRattleLangevin: 300 K, 1/ps, a fixed random seed). */
+/** The integrator of that kind (MRattleLangevin: 300 K, 1/ps, a fixed random seed; MRattleNoseHoover, MRattleBussi: 300 K, 10/ps, Bussi a fixed seed). */
 std::unique_ptr<MRattlePlugin::RigidBodyIntegrator> makeIntegrator(const std::string& kind, double stepSize);
 /** Platform properties of the tests: one thread on CPU (several sum forces in varying order), double precision on OpenCL. */
 std::map<std::string, std::string> platformProperties(const std::string& platform);
@@ -153,6 +153,13 @@ OpenMM::Vec3 rotate(const std::vector<OpenMM::Vec3>& rotation, const OpenMM::Vec
  * Without constraints it is plain velocity Verlet. The caller owns the result.
  */
 OpenMM::CustomIntegrator* rattleVerletIntegrator(double stepSize, double constraintTolerance);
+
+/** An integrator's XML (OpenMM's XmlSerializer, as "Integrator"). */
+std::string toXml(const OpenMM::Integrator& integrator);
+/** The integrator that XML describes (XmlSerializer; throws what it throws). */
+std::unique_ptr<OpenMM::Integrator> fromXml(const std::string& xml);
+/** The message of reading an integrator's XML with the first `original` replaced by `replacement` (and a test failure if it is not there, or if reading does not throw). */
+std::string messageOfXmlWith(const std::string& xml, const std::string& original, const std::string& replacement);
 
 /** Particle masses of a System. */
 std::vector<double> masses(const OpenMM::System& system);

@@ -13,3 +13,9 @@ MRattlePlugin::IntegrateRigidSplittingStepKernel::~IntegrateRigidSplittingStepKe
 
 MRattlePlugin::IntegrateMRattleLangevinStepKernel::~IntegrateMRattleLangevinStepKernel() {
 }
+
+MRattlePlugin::IntegrateMRattleNoseHooverStepKernel::~IntegrateMRattleNoseHooverStepKernel() {
+}
+
+MRattlePlugin::IntegrateMRattleBussiStepKernel::~IntegrateMRattleBussiStepKernel() {
+}

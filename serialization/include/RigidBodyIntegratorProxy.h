@@ -11,6 +11,8 @@
 namespace MRattlePlugin {
 
 class MRattleLangevinIntegrator;
+class MRattleNoseHooverIntegrator;
+class MRattleBussiIntegrator;
 
 /**
  * XmlSerializer support for a RigidBodyIntegrator subclass T: one proxy for the whole
@@ -60,6 +62,22 @@ OPENMM_EXPORT_MRATTLE void RigidBodyIntegratorProxy<MRattleLangevinIntegrator>::
     const MRattleLangevinIntegrator& integrator, OpenMM::SerializationNode& node);
 template <>
 OPENMM_EXPORT_MRATTLE MRattleLangevinIntegrator* RigidBodyIntegratorProxy<MRattleLangevinIntegrator>::create(
+    const OpenMM::SerializationNode& node, const std::string& typeName);
+
+/** Temperature, collision frequency, chain length, multiple time steps, Yoshida-Suzuki order. */
+template <>
+OPENMM_EXPORT_MRATTLE void RigidBodyIntegratorProxy<MRattleNoseHooverIntegrator>::writeOwnSettings(
+    const MRattleNoseHooverIntegrator& integrator, OpenMM::SerializationNode& node);
+template <>
+OPENMM_EXPORT_MRATTLE MRattleNoseHooverIntegrator* RigidBodyIntegratorProxy<MRattleNoseHooverIntegrator>::create(
+    const OpenMM::SerializationNode& node, const std::string& typeName);
+
+/** Temperature, collision frequency and random seed. */
+template <>
+OPENMM_EXPORT_MRATTLE void RigidBodyIntegratorProxy<MRattleBussiIntegrator>::writeOwnSettings(
+    const MRattleBussiIntegrator& integrator, OpenMM::SerializationNode& node);
+template <>
+OPENMM_EXPORT_MRATTLE MRattleBussiIntegrator* RigidBodyIntegratorProxy<MRattleBussiIntegrator>::create(
     const OpenMM::SerializationNode& node, const std::string& typeName);
 
 } // namespace MRattlePlugin

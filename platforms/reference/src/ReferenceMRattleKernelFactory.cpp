@@ -2,6 +2,7 @@
 #include "ReferenceMRattleKernels.h"
 #include "ReferenceMRattleLangevinKernels.h"
 #include "ReferenceRigidSplittingKernels.h"
+#include "ReferenceThermostatKernels.h"
 #include "MRattlePlatforms.h"
 #include "internal/OpenMMVersionCheck.h"
 #include "openmm/OpenMMException.h"
@@ -19,6 +20,10 @@ KernelImpl* ReferenceMRattleKernelFactory::createKernelImpl(std::string name, co
         return new ReferenceIntegrateRigidSplittingStepKernel(name, platform);
     if (name == IntegrateMRattleLangevinStepKernel::Name())
         return new ReferenceIntegrateMRattleLangevinStepKernel(name, platform);
+    if (name == IntegrateMRattleNoseHooverStepKernel::Name())
+        return new ReferenceIntegrateMRattleNoseHooverStepKernel(name, platform);
+    if (name == IntegrateMRattleBussiStepKernel::Name())
+        return new ReferenceIntegrateMRattleBussiStepKernel(name, platform);
     throw OpenMMException("ReferenceMRattleKernelFactory: no kernel named '" + name + "'");
 }
 
@@ -47,6 +52,8 @@ void registerOnReferenceAndCpu() {
             platform.registerKernelFactory(IntegrateMRattleStepKernel::Name(), factory);
             platform.registerKernelFactory(IntegrateRigidSplittingStepKernel::Name(), factory);
             platform.registerKernelFactory(IntegrateMRattleLangevinStepKernel::Name(), factory);
+            platform.registerKernelFactory(IntegrateMRattleNoseHooverStepKernel::Name(), factory);
+            platform.registerKernelFactory(IntegrateMRattleBussiStepKernel::Name(), factory);
         }
     }
 }
