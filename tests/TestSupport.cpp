@@ -108,9 +108,9 @@ std::string unavailable(const std::string& name) {
 }
 
 namespace {
-/** The integrators the device kernels run (the splitting baseline and the thermostats have none yet). */
+/** The integrators the device kernels run: all but the splitting baseline. */
 bool runsOnDevicePlatforms(const std::string& integrator) {
-    return integrator == "MRattle" || integrator == "MRattleLangevin";
+    return integrator != "RigidSplitting";
 }
 } // namespace
 

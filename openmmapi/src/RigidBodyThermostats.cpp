@@ -2,6 +2,7 @@
 #include "openmm/OpenMMException.h"
 #include <cmath>
 #include <cstdint>
+#include <cstring>
 #include <istream>
 #include <ostream>
 
@@ -130,4 +131,20 @@ double RigidBodyThermostats::csvrScale(double kineticEnergy, double dof, double 
     const double newKinetic = along * along + (1 - c) * meanKinetic * others / dof;
     const double alpha = std::sqrt(newKinetic / kineticEnergy);
     return along < 0 ? -alpha : alpha;
+}
+
+std::string RigidBodyThermostats::csvrWorkState(double work) {
+    std::string state(sizeof(work), '\0');
+    std::memcpy(&state[0], &work, sizeof(work));
+    return state;
+}
+
+double RigidBodyThermostats::csvrWorkFromState(const std::string& state) {
+    double work;
+    if (state.size() != sizeof(work))
+        throw OpenMMException("the checkpoint's kernel data is malformed (the thermostat's work)");
+    std::memcpy(&work, state.data(), sizeof(work));
+    if (!std::isfinite(work))
+        throw OpenMMException("the checkpoint's kernel data is malformed (the thermostat's work is not finite)");
+    return work;
 }

@@ -4,6 +4,7 @@
 #include "internal/windowsExportMRattle.h"
 #include <iosfwd>
 #include <random>
+#include <string>
 #include <vector>
 
 namespace MRattlePlugin {
@@ -63,6 +64,11 @@ struct OPENMM_EXPORT_MRATTLE NoseHooverChain {
  */
 OPENMM_EXPORT_MRATTLE double csvrScale(double kineticEnergy, double dof, double kT, double frequency, double t,
                                        std::mt19937_64& random);
+
+/** CSVR's accumulated work as a checkpoint's bytes (a kernel's state, bit for bit). */
+OPENMM_EXPORT_MRATTLE std::string csvrWorkState(double work);
+/** The work from csvrWorkState()'s bytes; throws an OpenMMException if they are malformed. */
+OPENMM_EXPORT_MRATTLE double csvrWorkFromState(const std::string& state);
 
 } // namespace RigidBodyThermostats
 } // namespace MRattlePlugin

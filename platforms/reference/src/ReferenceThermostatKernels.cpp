@@ -3,7 +3,6 @@
 #include "openmm/OpenMMException.h"
 #include "openmm/reference/SimTKOpenMMRealType.h"
 #include <cmath>
-#include <cstring>
 #include <sstream>
 
 using namespace MRattlePlugin;
@@ -98,20 +97,12 @@ double ReferenceIntegrateMRattleBussiStepKernel::halfStepScale(double kineticEne
 }
 
 void ReferenceIntegrateMRattleBussiStepKernel::createCheckpoint(ContextImpl& context, std::ostream& stream) const {
-    ReferenceVelocityScalingStepKernel::createCheckpoint(context, stream);  // the random stream
-    std::string state(sizeof(work), '\0');
-    std::memcpy(&state[0], &work, sizeof(work));
-    HostRigidBodyRules::writeKernelState(stream, state);
+    ReferenceVelocityScalingStepKernel::createCheckpoint(context, stream);  // the random stream (on a device, OpenMM's part holds it)
+    HostRigidBodyRules::writeKernelState(stream, RigidBodyThermostats::csvrWorkState(work));
 }
 
 void ReferenceIntegrateMRattleBussiStepKernel::loadCheckpoint(ContextImpl& context, std::istream& stream) {
     ReferenceVelocityScalingStepKernel::loadCheckpoint(context, stream);
-    const std::string state = HostRigidBodyRules::readKernelState(stream);
-    double value;
-    if (state.size() != sizeof(value))
-        throw OpenMMException("the checkpoint's kernel data is malformed (the thermostat's work)");
-    std::memcpy(&value, state.data(), sizeof(value));
-    if (!std::isfinite(value))
-        throw OpenMMException("the checkpoint's kernel data is malformed (the thermostat's work is not finite)");
+    const double value = RigidBodyThermostats::csvrWorkFromState(HostRigidBodyRules::readKernelState(stream));
     work = value;
 }
