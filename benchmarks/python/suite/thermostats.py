@@ -121,7 +121,7 @@ STEPS_FS = (2, 0.5, 1, 3, 4, 5)
 
 def run(quick, out, log, threads=1, methods=METHODS):
     """Every run; out + '.csv' gets a row per run as it ends; returns the report as markdown lines."""
-    production_ps, short_ps, equilibrate_ps = (0.2, 0.05, 0.05) if quick else (20.0, 2.0, 2.0)
+    production_ps, short_ps, equilibrate_ps = (0.2, 0.1, 0.05) if quick else (20.0, 2.0, 2.0)
     began = time.time()
     pdb, system = langevin.water_system()
     positions = langevin.exact_geometry(system, pdb.positions)
