@@ -45,7 +45,7 @@ class BodyEnvironment : public RigidBodyTest {};
 } // namespace
 
 TEST_P(BodyEnvironment, VirtualSitesFollowTheirParents) {
-    SKIP_UNLESS_VERLET(GetParam());
+    SKIP_UNLESS_CONSERVES_ENERGY(GetParam());
     // TIP4P-Ew-like: the negative charge on a massless site M on the H-O-H bisector.
     Cluster c = buildCluster(water(), 2, 0.32, 9);
     NonbondedForce& nonbonded = nonbondedForce(*c.system);

@@ -164,7 +164,7 @@ TEST_P(BodySemantics, IntraBodyForcesChangeNothing) {
 }
 
 TEST_P(BodySemantics, ExplicitBodiesWithFreeParticles) {
-    SKIP_UNLESS_VERLET(GetParam());
+    SKIP_UNLESS_CONSERVES_ENERGY(GetParam());
     // Declared bodies, free atoms and a constrained free pair: what is rigid, what is free,
     // the degrees of freedom and the temperature they give; then the bodies stay rigid
     // and the pair keeps its length while the system moves.
@@ -279,7 +279,7 @@ TEST_P(BodySemantics, MoleculesAreBodiesInAutomaticMode) {
 }
 
 TEST_P(BodySemantics, LinearBodyStaysLinearWithoutSpin) {
-    SKIP_UNLESS_VERLET(GetParam());
+    SKIP_UNLESS_CONSERVES_ENERGY(GetParam());
     // O=C=S (distinct masses) among argon atoms.
     Molecule ocs;
     ocs.sites = {Vec3(-0.116, 0, 0), Vec3(0, 0, 0), Vec3(0.156, 0, 0)};
@@ -356,7 +356,7 @@ TEST_P(BodySemantics, SingleParticleBodyIsFree) {
 }
 
 TEST_P(BodySemantics, TemperatureAndDegreesOfFreedomWithMotionRemover) {
-    SKIP_UNLESS_VERLET(GetParam());
+    SKIP_UNLESS_CONSERVES_ENERGY(GetParam());
     MixedSystem m = mixedSystem();
     m.cluster.system->addForce(new CMMotionRemover(1));
     std::unique_ptr<RigidBodyIntegrator> integrator = makeIntegrator(0.002);

@@ -15,7 +15,9 @@
  */
 #include "RigidSplittingIntegrator.h"
 #include "TestSupport.h"
+#include "MRattleBussiIntegrator.h"
 #include "MRattleLangevinIntegrator.h"
+#include "MRattleNoseHooverIntegrator.h"
 #include "openmm/serialization/XmlSerializer.h"
 #include <gtest/gtest.h>
 #include <algorithm>
@@ -169,6 +171,7 @@ void loadCheckpoint(Context& context, const string& checkpoint) {
 
 /** A Context on a cluster, at 300 K. */
 struct TestRun {
+    Config config;
     MixedCluster cluster;
     std::unique_ptr<RigidBodyIntegrator> integrator;
     std::unique_ptr<Context> context;
@@ -178,7 +181,7 @@ struct TestRun {
     }
     TestRun(const Config& config, std::unique_ptr<RigidBodyIntegrator> integratorToUse, int extras = NoExtras,
             const vector<vector<int> >& bodies = {})
-        : cluster(mixedCluster(extras)), integrator(std::move(integratorToUse)) {
+        : config(config), cluster(mixedCluster(extras)), integrator(std::move(integratorToUse)) {
         for (const auto& body : bodies)
             integrator->addRigidBody(body);
         context.reset(new Context(cluster.system, *integrator, platform(config.platform),
@@ -277,7 +280,7 @@ TEST_P(Checkpoint, RestartInNewContextIsBitwiseIdentical) {
 }
 
 TEST_P(Checkpoint, ReinitializePreservingStateContinuesTheRun) {
-    SKIP_UNLESS_VERLET(GetParam());
+    SKIP_UNLESS_CONSERVES_ENERGY(GetParam());
     // Context::reinitialize(true) goes through a checkpoint.
     TestRun uninterrupted(GetParam()), reinitialized(GetParam());
     uninterrupted.integrator->step(StepsBefore + StepsAfter);
@@ -318,9 +321,10 @@ void expectRefusedUntilStateIsSet(TestRun& run, const string& badCheckpoint, con
 
     loadCheckpoint(*run.context, good);
     run.integrator->step(10);
-    // A Langevin integrator's noise restarts from its seed at reinitialize() (a State holds
-    // no random stream), so only a deterministic run continues as the good checkpoint's.
-    if (dynamic_cast<MRattleLangevinIntegrator*>(run.integrator.get()) == nullptr)
+    // An integrator's own state (a random stream, a thermostat's chain) restarts at
+    // reinitialize() (a State does not hold it), so only one without it continues as the
+    // good checkpoint's.
+    if (!run.config.traits().hasOwnState)
         expectSameState(afterRefusal, snapshot(*run.context));
 }
 
@@ -380,10 +384,11 @@ TEST_P(Checkpoint, RefusesCheckpointOfAnotherIntegrator) {
         if (other.platform != GetParam().platform || other.integrator == GetParam().integrator)
             continue;
         TestRun otherRun(other);
-        // On a device platform OpenMM's own part of a Langevin checkpoint holds its device
-        // random state, which a Verlet one lacks: the plugin's part is then not where it
-        // looks, and the refusal says the integrator is another one without naming it.
-        const bool otherLayout = isDevicePlatform(other.platform) && other.isVerlet() != GetParam().isVerlet();
+        // On a device platform OpenMM's own part of a stochastic integrator's checkpoint holds
+        // its device random state, which a deterministic one's lacks: the plugin's part is then
+        // not where it looks, and the refusal says the integrator is another one without naming it.
+        const bool otherLayout =
+            isDevicePlatform(other.platform) && other.traits().stochastic != GetParam().traits().stochastic;
         expectRefusedUntilStateIsSet(run, checkpointOf(*otherRun.context),
                                      otherLayout ? vector<string>{"a different integrator"}
                                                  : vector<string>{"Integrate" + other.integrator + "Step",
@@ -468,11 +473,23 @@ TEST_P(Checkpoint, SteppingWritesNoCheckpointEvenWithJunkLeftByARefusedOne) {
         checkpointsWritten = &integrator->checkpointsWritten;
         counting.reset(integrator);
     }
-    else {
+    else if (GetParam().integrator == "RigidSplitting") {
         auto* integrator = new CountingCheckpoints<RigidSplittingIntegrator>(0.002);
         checkpointsWritten = &integrator->checkpointsWritten;
         counting.reset(integrator);
     }
+    else if (GetParam().integrator == "MRattleNoseHoover") {
+        auto* integrator = new CountingCheckpoints<MRattleNoseHooverIntegrator>(300.0, 10.0, 0.002);
+        checkpointsWritten = &integrator->checkpointsWritten;
+        counting.reset(integrator);
+    }
+    else if (GetParam().integrator == "MRattleBussi") {
+        auto* integrator = new CountingCheckpoints<MRattleBussiIntegrator>(300.0, 10.0, 0.002);
+        checkpointsWritten = &integrator->checkpointsWritten;
+        counting.reset(integrator);
+    }
+    else
+        FAIL() << "add " << GetParam().integrator << "'s CountingCheckpoints here (a subclass of each integrator class)";
     TestRun run(GetParam(), std::move(counting), WithThermostat);
     auto written = [&] { return *checkpointsWritten; };
     run.context->setParameter(AndersenThermostat::Temperature(), 310);
@@ -500,7 +517,7 @@ TEST_P(Checkpoint, SteppingWritesNoCheckpointEvenWithJunkLeftByARefusedOne) {
 }
 
 TEST_P(SavedState, GivesRigidVelocitiesBackBitForBit) {
-    SKIP_UNLESS_VERLET(GetParam());
+    SKIP_UNLESS_CONSERVES_ENERGY(GetParam());
     TestRun run(GetParam());
     run.integrator->step(StepsBefore);
     State saved = run.context->getState(State::Positions | State::Velocities | State::Parameters);

@@ -107,19 +107,47 @@ std::string unavailable(const std::string& name) {
     return reasons[name];
 }
 
-namespace {
-/** The integrators the device kernels run: all but the splitting baseline. */
-bool runsOnDevicePlatforms(const std::string& integrator) {
-    return integrator != "RigidSplitting";
+const std::vector<IntegratorTraits>& integrators() {
+    using namespace MRattlePlugin;
+    static const std::vector<IntegratorTraits> list = {
+        // name, conservesEnergy, stochastic, runsOnDevicePlatforms, hasOwnState, rescalesVelocities, make, removeNoise
+        {"MRattle", true, false, true, false, false, [](double h) { return new MRattleIntegrator(h); }},
+        {"MRattleLangevin", false, true, true, true, false,
+         [](double h) {
+             auto* langevin = new MRattleLangevinIntegrator(300.0, 1.0, h);
+             langevin->setRandomNumberSeed(2024);
+             return langevin;
+         },
+         [](RigidBodyIntegrator& integrator) { dynamic_cast<MRattleLangevinIntegrator&>(integrator).setFriction(0); }},
+        {"RigidSplitting", true, false, false, false, false, [](double h) { return new RigidSplittingIntegrator(h); }},
+        {"MRattleNoseHoover", false, false, true, true, true,  // 300 K, 10/ps, chain of 3, MTS 3, Yoshida-Suzuki 7
+         [](double h) { return new MRattleNoseHooverIntegrator(300.0, 10.0, h); }},
+        {"MRattleBussi", false, true, true, true, true,
+         [](double h) {
+             auto* bussi = new MRattleBussiIntegrator(300.0, 10.0, h);
+             bussi->setRandomNumberSeed(2024);
+             return bussi;
+         },
+         [](RigidBodyIntegrator& integrator) {
+             dynamic_cast<MRattleBussiIntegrator&>(integrator).setCollisionFrequency(0);
+         }},
+    };
+    return list;
 }
-} // namespace
+
+const IntegratorTraits& integratorTraits(const std::string& name) {
+    for (const IntegratorTraits& traits : integrators())
+        if (traits.name == name)
+            return traits;
+    throw OpenMMException("no rigid-body integrator named '" + name + "' in the tests' list (integrators())");
+}
 
 std::vector<Config> configsOf(const std::string& integrator) {
     std::vector<Config> configs;
+    const bool onDevices = integratorTraits(integrator).runsOnDevicePlatforms;
     for (const MRattlePlugin::BuiltPlatform& built : MRattlePlugin::BuiltPlatforms) {
-        // The device platforms run every integrator but the splitting baseline. One that
-        // cannot run here (unavailable()) keeps its configs: their tests skip, saying why.
-        if (built.device && !runsOnDevicePlatforms(integrator))
+        // One that cannot run here (unavailable()) keeps its configs: their tests skip, saying why.
+        if (built.device && !onDevices)
             continue;
         configs.push_back({built.name, integrator});
     }
@@ -128,8 +156,8 @@ std::vector<Config> configsOf(const std::string& integrator) {
 
 std::vector<Config> allConfigs() {
     std::vector<Config> configs;
-    for (const std::string& integrator : {"MRattle", "MRattleLangevin", "RigidSplitting"})
-        for (const Config& config : configsOf(integrator))
+    for (const IntegratorTraits& traits : integrators())
+        for (const Config& config : configsOf(traits.name))
             configs.push_back(config);
     return configs;
 }
@@ -143,24 +171,7 @@ std::string configName(const ::testing::TestParamInfo<Config>& info) {
 }
 
 std::unique_ptr<MRattlePlugin::RigidBodyIntegrator> makeIntegrator(const std::string& kind, double stepSize) {
-    if (kind == "MRattle")
-        return std::unique_ptr<MRattlePlugin::RigidBodyIntegrator>(new MRattlePlugin::MRattleIntegrator(stepSize));
-    if (kind == "RigidSplitting")
-        return std::unique_ptr<MRattlePlugin::RigidBodyIntegrator>(new MRattlePlugin::RigidSplittingIntegrator(stepSize));
-    if (kind == "MRattleLangevin") {  // 300 K, 1/ps; a fixed seed: two Contexts draw the same noise
-        auto* langevin = new MRattlePlugin::MRattleLangevinIntegrator(300.0, 1.0, stepSize);
-        langevin->setRandomNumberSeed(2024);
-        return std::unique_ptr<MRattlePlugin::RigidBodyIntegrator>(langevin);
-    }
-    if (kind == "MRattleNoseHoover")  // 300 K, 10/ps, chain of 3, MTS 3, Yoshida-Suzuki 7
-        return std::unique_ptr<MRattlePlugin::RigidBodyIntegrator>(
-            new MRattlePlugin::MRattleNoseHooverIntegrator(300.0, 10.0, stepSize));
-    if (kind == "MRattleBussi") {  // 300 K, 10/ps; a fixed seed
-        auto* bussi = new MRattlePlugin::MRattleBussiIntegrator(300.0, 10.0, stepSize);
-        bussi->setRandomNumberSeed(2024);
-        return std::unique_ptr<MRattlePlugin::RigidBodyIntegrator>(bussi);
-    }
-    throw OpenMMException("makeIntegrator: no integrator kind '" + kind + "'");
+    return std::unique_ptr<MRattlePlugin::RigidBodyIntegrator>(integratorTraits(kind).make(stepSize));
 }
 
 std::map<std::string, std::string> platformProperties(const std::string& name) {

@@ -17,23 +17,54 @@ void loadPlugins();
 OpenMM::Platform& platform(const std::string& name);
 
 /**
+ * A rigid-body integrator as the generic suites see it: what it is called, what it
+ * promises, where it runs and how to make one. integrators() lists them: a new integrator
+ * gets every generic suite by one entry there, and its tests ask for properties, never for
+ * names.
+ */
+struct IntegratorTraits {
+    /** "MRattle": the class name without "Integrator", for test names and messages. */
+    std::string name;
+    /** Deterministic and energy-conserving (velocity Verlet): NVE energy, velocities at the positions' time. */
+    bool conservesEnergy;
+    /** Draws random numbers: a run continues bit for bit only with its random state (on a device, OpenMM's). */
+    bool stochastic;
+    /** Runs on the device platforms (OpenCL, CUDA) as well as Reference and CPU. */
+    bool runsOnDevicePlatforms;
+    /**
+     * Keeps state of its own that a State does not hold (a random stream, a thermostat's
+     * variables): after Context::setState() it continues otherwise than from a checkpoint.
+     */
+    bool hasOwnState;
+    /** Its step first scales every velocity by a thermostat's factor: a motion a test sets up is changed before the drift. */
+    bool rescalesVelocities;
+    /** One with this step size (a thermostat: 300 K, 1/ps, a fixed random seed: two Contexts draw the same noise). */
+    std::function<MRattlePlugin::RigidBodyIntegrator*(double stepSize)> make;
+    /** A stochastic one's noise turned off (device and host draw different numbers: what is left must agree); else none. */
+    std::function<void(MRattlePlugin::RigidBodyIntegrator&)> removeNoise;
+};
+/** Every rigid-body integrator of the plugin. */
+const std::vector<IntegratorTraits>& integrators();
+/** The entry of integrators() with this name; throws if there is none. */
+const IntegratorTraits& integratorTraits(const std::string& name);
+
+/**
  * One platform and one rigid-body integrator: the generic suites (TEST_P) run for every
  * combination in allConfigs(), so a new platform or integrator gets the whole suite by
- * adding it there.
+ * adding it there (BuiltPlatforms, integrators()).
  */
 struct Config {
     std::string platform;    // a name from the build's list of platforms (MRattlePlatforms.h)
-    std::string integrator;  // "MRattle", "MRattleLangevin", "RigidSplitting", "MRattleNoseHoover", "MRattleBussi"
-    /** Velocity Verlet (MRattle, RigidSplitting): energy-conserving, deterministic, velocities at the positions' time. */
-    bool isVerlet() const {
-        return integrator != "MRattleLangevin";
+    std::string integrator;  // a name from integrators()
+    const IntegratorTraits& traits() const {
+        return integratorTraits(integrator);
     }
 };
 /** How GoogleTest prints a Config (in test names and failures). */
 void PrintTo(const Config& config, std::ostream* out);
 /** Every platform with the plugin's kernels, times every rigid-body integrator. */
 std::vector<Config> allConfigs();
-/** Every platform that runs this integrator (the device platforms run all but RigidSplitting). */
+/** Every platform that runs this integrator (the device platforms only those that runsOnDevicePlatforms). */
 std::vector<Config> configsOf(const std::string& integrator);
 /** The device platforms (OpenCL, CUDA) of the build's list that OpenMM has here. */
 std::vector<std::string> devicePlatforms();
@@ -55,20 +86,20 @@ std::string unavailable(const std::string& name);
     } while (0)
 /** "Reference_MRattle": a test-name suffix. */
 std::string configName(const ::testing::TestParamInfo<Config>& info);
-/** The integrator of that kind (MRattleLangevin: 300 K, 1/ps, a fixed random seed; MRattleNoseHoover, MRattleBussi: 300 K, 10/ps, Bussi a fixed seed). */
+/** The integrator of that name in integrators(). */
 std::unique_ptr<MRattlePlugin::RigidBodyIntegrator> makeIntegrator(const std::string& kind, double stepSize);
 /** Platform properties of the tests: one thread on CPU (several sum forces in varying order), double precision on OpenCL. */
 std::map<std::string, std::string> platformProperties(const std::string& platform);
 
 /**
- * Skip a generic test that checks what only velocity Verlet has (energy conservation, a
- * temperature that stays as set, a run that continues bit for bit without the random
- * stream), saying why.
+ * Skip a generic test that checks what only an energy-conserving integrator has (energy
+ * conservation, a temperature that stays as set, a run that continues bit for bit without
+ * a random stream), saying why.
  */
-#define SKIP_UNLESS_VERLET(config)                                                                    \
-    if (!(config).isVerlet())                                                                         \
-        GTEST_SKIP() << (config).integrator << " is a thermostat (Langevin): this test checks a property " \
-                        "of velocity Verlet (NVE energy, on-step velocities, no random stream)";
+#define SKIP_UNLESS_CONSERVES_ENERGY(config)                                                            \
+    if (!(config).traits().conservesEnergy)                                                             \
+        GTEST_SKIP() << (config).integrator << " is a thermostat: this test checks a property of an "   \
+                        "energy-conserving integrator (NVE energy, on-step velocities, no random stream)";
 
 /** The fixture of the generic suites. */
 class RigidBodyTest : public ::testing::TestWithParam<Config> {

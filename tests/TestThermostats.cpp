@@ -207,6 +207,43 @@ TEST_P(Thermostat, RunsInACompoundIntegratorAndWithABarostat) {
     EXPECT_LT(maxDistanceChange(c.positions, state.getPositions(), c.molecules), 1e-9);
 }
 
+TEST_P(Thermostat, AFailedStepLeavesTheThermostatAsItWas) {
+    // Two waters, one driven into a wall sqrt(c - x) whose force stops being finite past c:
+    // the step that crosses it is refused, and the particles and the heat bath are as before it.
+    Cluster c = buildCluster(water(), 2, 0.4, 3, ClusterOptions());
+    CustomExternalForce* wall = new CustomExternalForce("sqrt(0.3 - x)");
+    for (int i = 0; i < c.system->getNumParticles(); i++)
+        wall->addParticle(i);
+    c.system->addForce(wall);
+    std::unique_ptr<RigidBodyIntegrator> integrator = makeThermostat(300, 20.0, 0.002);
+    std::unique_ptr<Context> context = makeContext(*c.system, *integrator);
+    context->setPositions(c.positions);
+    vector<Vec3> velocities(c.system->getNumParticles(), Vec3(2.0, 0, 0));
+    context->setVelocities(velocities);
+    bool refused = false;
+    for (int i = 0; i < 200 && !refused; i++) {
+        State before = context->getState(State::Positions | State::Velocities);
+        const double bath = heatBathEnergy(*integrator);
+        string message;
+        try {
+            integrator->step(1);
+            context->getState(State::Energy);  // on a device platform the failure may be reported here
+            continue;
+        } catch (const OpenMMException& e) {
+            message = e.what();
+        }
+        refused = true;
+        EXPECT_NE(string::npos, message.find("not finite")) << message;
+        State after = context->getState(State::Positions | State::Velocities);
+        EXPECT_EQ(before.getStepCount(), after.getStepCount());
+        EXPECT_EQ(0.0, maxDeviation(before.getPositions(), after.getPositions()));
+        EXPECT_EQ(0.0, maxDeviation(before.getVelocities(), after.getVelocities()));
+        EXPECT_EQ(bath, heatBathEnergy(*integrator));
+        EXPECT_NE(0.0, bath);  // the thermostat had acted before
+    }
+    EXPECT_TRUE(refused) << "the waters never reached the wall";
+}
+
 TEST(ThermostatApi, RefusesBadSettings) {
     EXPECT_NE(string::npos, messageOf([] { MRattleNoseHooverIntegrator(0, 1, 0.002); }).find("temperature"));
     EXPECT_NE(string::npos, messageOf([] { MRattleNoseHooverIntegrator(300, -1, 0.002); }).find("collision frequency"));

@@ -40,7 +40,8 @@ TEST(Threads, BodiesGiveTheSameTrajectoryWithOneAndTwoThreads) {
         }
         bodies.push_back(body);
     }
-    for (const string kind : {"MRattle", "RigidSplitting", "MRattleLangevin"}) {
+    for (const IntegratorTraits& traits : integrators()) {
+        const string& kind = traits.name;
         vector<vector<Vec3> > results;
         for (const string threads : {"1", "2"}) {
             std::unique_ptr<RigidBodyIntegrator> integrator = makeIntegrator(kind, 0.002);

@@ -24,13 +24,15 @@ def main():
     parser.add_argument('--minutes', type=float, default=0.0, help='with --report-from: how long that run took')
     parser.add_argument('--started', help='with --report-from: when that run started (UTC, YYYY-MM-DD HH:MM)')
     parser.add_argument('--splice', help='a results.md to put the section into (replacing its own)')
+    parser.add_argument('--steps', help='comma-separated step sizes in fs to run (default: all)')
     args = parser.parse_args()
     began = time.time()
     if args.report_from:
         md = thermostats.report(thermostats.rows_from_csv(args.report_from), 895, False, 20.0, 2.0, 2.0, 1,
                                 args.minutes)
     else:
-        md = thermostats.run(args.quick, args.out, lambda text: print(text, flush=True))
+        steps = [float(x) for x in args.steps.split(',')] if args.steps else None
+        md = thermostats.run(args.quick, args.out, lambda text: print(text, flush=True), steps=steps)
     print('\n'.join(md))
     if args.splice:
         stamp = ('*This section comes from `benchmarks/python/thermostat_validation.py` (the suite\'s `thermostats` '

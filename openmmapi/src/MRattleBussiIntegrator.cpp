@@ -51,3 +51,7 @@ std::string MRattleBussiIntegrator::getStepKernelName() const {
 void MRattleBussiIntegrator::executeStep(Kernel& kernel, ContextImpl& context, bool& forcesAreValid) {
     kernel.getAs<IntegrateMRattleBussiStepKernel>().execute(context, *this, forcesAreValid);
 }
+
+// The key function of this integrator's kernel interface (its vtable lives in this library).
+IntegrateMRattleBussiStepKernel::~IntegrateMRattleBussiStepKernel() {
+}

@@ -5,6 +5,11 @@
 using namespace MRattlePlugin;
 using namespace OpenMM;
 
+// The kernel interface's key function: its vtable and type information live in this
+// library only, so Kernel::getAs<> casts agree across the plugin's shared libraries.
+IntegrateMRattleStepKernel::~IntegrateMRattleStepKernel() {
+}
+
 MRattleIntegrator::MRattleIntegrator(double stepSize) {
     setStepSize(stepSize);
 }

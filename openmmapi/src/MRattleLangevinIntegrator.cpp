@@ -7,6 +7,11 @@
 using namespace MRattlePlugin;
 using namespace OpenMM;
 
+// The kernel interface's key function: its vtable and type information live in this
+// library only, so Kernel::getAs<> casts agree across the plugin's shared libraries.
+IntegrateMRattleLangevinStepKernel::~IntegrateMRattleLangevinStepKernel() {
+}
+
 MRattleLangevinIntegrator::MRattleLangevinIntegrator(double temperature, double frictionCoeff, double stepSize) {
     setTemperature(temperature);
     setFriction(frictionCoeff);

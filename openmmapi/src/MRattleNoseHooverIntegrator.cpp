@@ -51,3 +51,7 @@ std::string MRattleNoseHooverIntegrator::getStepKernelName() const {
 void MRattleNoseHooverIntegrator::executeStep(Kernel& kernel, ContextImpl& context, bool& forcesAreValid) {
     kernel.getAs<IntegrateMRattleNoseHooverStepKernel>().execute(context, *this, forcesAreValid);
 }
+
+// The key function of this integrator's kernel interface (its vtable lives in this library).
+IntegrateMRattleNoseHooverStepKernel::~IntegrateMRattleNoseHooverStepKernel() {
+}

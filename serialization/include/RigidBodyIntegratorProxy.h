@@ -10,10 +10,6 @@
 
 namespace MRattlePlugin {
 
-class MRattleLangevinIntegrator;
-class MRattleNoseHooverIntegrator;
-class MRattleBussiIntegrator;
-
 /**
  * XmlSerializer support for a RigidBodyIntegrator subclass T: one proxy for the whole
  * family (all registered when libMRattlePlugin is loaded, in
@@ -21,7 +17,8 @@ class MRattleBussiIntegrator;
  * T's own settings, then the shared ones (RigidBodyIntegratorSerialization); it reads
  * them back in the same order. An integrator whose only constructor argument is the step
  * size needs nothing more; one with settings of its own specializes writeOwnSettings()
- * and create() (as MRattleLangevinIntegrator does, below).
+ * and create() in its own proxy header and source (as MRattleLangevinIntegratorProxy.h and
+ * .cpp do); the registration includes that header.
  */
 template <class T>
 class RigidBodyIntegratorProxy : public OpenMM::SerializationProxy {
@@ -55,30 +52,6 @@ private:
         return new T(RigidBodyIntegratorSerialization::getStepSize(node, typeName));
     }
 };
-
-/** Temperature, friction and random seed. */
-template <>
-OPENMM_EXPORT_MRATTLE void RigidBodyIntegratorProxy<MRattleLangevinIntegrator>::writeOwnSettings(
-    const MRattleLangevinIntegrator& integrator, OpenMM::SerializationNode& node);
-template <>
-OPENMM_EXPORT_MRATTLE MRattleLangevinIntegrator* RigidBodyIntegratorProxy<MRattleLangevinIntegrator>::create(
-    const OpenMM::SerializationNode& node, const std::string& typeName);
-
-/** Temperature, collision frequency, chain length, multiple time steps, Yoshida-Suzuki order. */
-template <>
-OPENMM_EXPORT_MRATTLE void RigidBodyIntegratorProxy<MRattleNoseHooverIntegrator>::writeOwnSettings(
-    const MRattleNoseHooverIntegrator& integrator, OpenMM::SerializationNode& node);
-template <>
-OPENMM_EXPORT_MRATTLE MRattleNoseHooverIntegrator* RigidBodyIntegratorProxy<MRattleNoseHooverIntegrator>::create(
-    const OpenMM::SerializationNode& node, const std::string& typeName);
-
-/** Temperature, collision frequency and random seed. */
-template <>
-OPENMM_EXPORT_MRATTLE void RigidBodyIntegratorProxy<MRattleBussiIntegrator>::writeOwnSettings(
-    const MRattleBussiIntegrator& integrator, OpenMM::SerializationNode& node);
-template <>
-OPENMM_EXPORT_MRATTLE MRattleBussiIntegrator* RigidBodyIntegratorProxy<MRattleBussiIntegrator>::create(
-    const OpenMM::SerializationNode& node, const std::string& typeName);
 
 } // namespace MRattlePlugin
 

@@ -1,5 +1,4 @@
-#include "RigidBodyIntegratorProxy.h"
-#include "MRattleBussiIntegrator.h"
+#include "MRattleBussiIntegratorProxy.h"
 #include "openmm/OpenMMException.h"
 #include <memory>
 

@@ -1,5 +1,4 @@
-#include "RigidBodyIntegratorProxy.h"
-#include "MRattleLangevinIntegrator.h"
+#include "MRattleLangevinIntegratorProxy.h"
 #include "openmm/OpenMMException.h"
 #include <memory>
 

@@ -1,5 +1,4 @@
-#include "RigidBodyIntegratorProxy.h"
-#include "MRattleNoseHooverIntegrator.h"
+#include "MRattleNoseHooverIntegratorProxy.h"
 #include "openmm/OpenMMException.h"
 #include <memory>
 

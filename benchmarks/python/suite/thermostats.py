@@ -54,25 +54,27 @@ def platform(threads):
 
 
 def block_variance(values, blocks=BLOCKS):
-    """The variance of a series and its standard error from the blocks' variances."""
+    """The variance of a series about its mean and its standard error: the mean squared deviation
+    from the whole series' mean, block-averaged (so the blocks' own means moving is counted)."""
     values = np.asarray(values, float)
-    n = len(values) // blocks
-    variances = values[:n * blocks].reshape(blocks, n).var(axis=1, ddof=1)
-    return variances.mean(), variances.std(ddof=1) / math.sqrt(blocks)
+    squares = (values - values.mean()) ** 2
+    return langevin.block_mean(squares, blocks)
 
 
-def diffusion(times, oxygens, groups=5):
-    """D (1e-5 cm^2/s) from the oxygens' mean-squared displacement, slope over lags of 20-60 % of
-    the run (all time origins); mean and standard error over groups of molecules."""
+def diffusion(times, oxygens, segments=4):
+    """D (1e-5 cm^2/s) from the oxygens' mean-squared displacement: in each of `segments` equal
+    time segments of the run, the slope over lags of 20-60 % of the segment (all time origins
+    in it), D = slope/6; mean and standard error over the segments."""
     t = np.asarray(times) - times[0]
     x = np.asarray(oxygens)  # frames x molecules x 3, unwrapped
-    lags = [k for k in range(1, len(t)) if 0.2 * t[-1] <= t[k] <= 0.6 * t[-1]]
     values = []
-    for g in np.array_split(np.arange(x.shape[1]), groups):
-        msd = [np.mean(np.sum((x[k:, g] - x[:-k, g]) ** 2, axis=2)) for k in lags]
-        slope = np.polyfit(t[lags], msd, 1)[0]  # nm^2/ps
+    for frames in np.array_split(np.arange(len(t)), segments):
+        ts, xs = t[frames] - t[frames[0]], x[frames]
+        lags = [k for k in range(1, len(ts)) if 0.2 * ts[-1] <= ts[k] <= 0.6 * ts[-1]]
+        msd = [np.mean(np.sum((xs[k:] - xs[:-k]) ** 2, axis=2)) for k in lags]
+        slope = np.polyfit(ts[lags], msd, 1)[0]  # nm^2/ps
         values.append(slope / 6 * 1e-2 / 1e-5)  # nm^2/ps = 1e-2 cm^2/s
-    return np.mean(values), np.std(values, ddof=1) / math.sqrt(groups)
+    return np.mean(values), np.std(values, ddof=1) / math.sqrt(segments)
 
 
 def run_series(method, step_fs, ps, start, system, bodies, threads, sample_fs=10.0, keep_oxygens=False):
@@ -119,7 +121,7 @@ CSV_COLUMNS = ['method', 'step_fs', 'ps', 'kinetic_mean', 'kinetic_mean_se', 'ki
 STEPS_FS = (2, 0.5, 1, 3, 4, 5)
 
 
-def run(quick, out, log, threads=1, methods=METHODS):
+def run(quick, out, log, threads=1, methods=METHODS, steps=None):
     """Every run; out + '.csv' gets a row per run as it ends; returns the report as markdown lines."""
     production_ps, short_ps, equilibrate_ps = (0.2, 0.1, 0.05) if quick else (20.0, 2.0, 2.0)
     began = time.time()
@@ -140,7 +142,7 @@ def run(quick, out, log, threads=1, methods=METHODS):
         csv.DictWriter(stream, CSV_COLUMNS).writeheader()
     rows = []
     for method in methods:
-        for step_fs in STEPS_FS:
+        for step_fs in steps or STEPS_FS:
             if method == 'LangevinMiddle + SETTLE' and step_fs != 2:
                 continue
             row = run_one(method, step_fs, production_ps if step_fs == 2 else short_ps, start, system, bodies, threads)
@@ -202,10 +204,10 @@ def report(rows, molecules, quick, production_ps, short_ps, equilibrate_ps, thre
           'sub-steps, Yoshida-Suzuki order 7) and `MRattleBussiIntegrator` (10/ps) at 300 K, beside '
           '`MRattleIntegrator` (NVE) and `LangevinMiddleIntegrator` + SETTLE (1/ps). %g ps at 2 fs per method, '
           'sampled every 10 fs; %g ps at the other steps. Means +- standard errors from %d blocks; a variance\'s '
-          'error from the spread of the blocks\' variances. N = %d degrees of freedom: the canonical kinetic '
+          'error from the blocks\' mean squared deviations from the run\'s mean. N = %d degrees of freedom: the canonical kinetic '
           'energy has mean N kT/2 = %.1f kJ/mol and variance N (kT)^2/2 = %.0f (kJ/mol)^2. Diffusion: the '
-          'oxygens\' mean-squared displacement over lags of 20-60%% of the run (all time origins), D = slope/6, '
-          'mean +- SE over 5 groups of molecules (no finite-size correction). Drift: least-squares slope of the '
+          'oxygens\' mean-squared displacement in each quarter of the 2-fs run, over lags of 20-60%% of it (all '
+          'time origins), D = slope/6, mean +- SE over the quarters (no finite-size correction). Drift: least-squares slope of the '
           'conserved quantity (kinetic + potential + `computeHeatBathEnergy()`; NVE: the total energy), '
           'kJ/mol/ns per water, its error inflated by the residuals\' statistical inefficiency '
           '(`benchmarks/python/suite/thermostats.py`, %.0f minutes).%s\n'

@@ -29,7 +29,10 @@ class RigidSplittingIntegrator;
  * own copy of the body topology and the state that depends on the configuration (which
  * bodies are linear) or on the run (random streams), and writes that state into
  * checkpoints. Each integrator has its own kernel (a subclass below, with its own name and
- * an execute() that takes that integrator), so that a platform can implement each one.
+ * an execute() that takes that integrator), so that a platform can implement each one. A
+ * subclass gives Name() (the kernel's), IntegratorName() (the class name failures are
+ * reported by on every platform), IntegratorType and execute(); its destructor, the key
+ * function, is defined in its integrator's .cpp (docs/contributing.md).
  */
 class OPENMM_EXPORT_MRATTLE RigidBodyKernel : public OpenMM::KernelImpl {
 public:
@@ -43,13 +46,15 @@ public:
     virtual void initialize(const OpenMM::System& system, const RigidBodyTopology& topology,
                             const RigidBodyIntegrator& integrator) = 0;
     /*
-     * The step contract of each subclass's execute(): with an AndersenThermostat in the
-     * System, bodies with a collided atom first get fresh thermal velocities as a whole; then the forces (unless forcesAreValid), the
-     * first half (half kick, drift, the integrator's position update, free-particle
-     * constraints, virtual sites), the forces at the new positions and the second half
-     * (half kick, rigid-body velocity projection). Advances time and step count. A step
-     * that fails throws an OpenMMException, found before the step count moves, and leaves
-     * positions, velocities, time and step count as they were.
+     * The step contract of each subclass's execute(): one step of its integrator, written on
+     * every platform as the same list of phases (ReferenceRigidBodyDynamics,
+     * CommonRigidBodyDynamics: beginStep, then kicks, drifts with resets, projections and the
+     * forces in the integrator's order, then endStep). beginStep does, with an
+     * AndersenThermostat in the System, the collisions of whole bodies (a body with a collided
+     * atom gets fresh thermal velocities as a whole), then the forces unless forcesAreValid.
+     * endStep advances time and step count. A step that fails throws an OpenMMException,
+     * found before the step count moves, naming the integrator (IntegratorName()), and
+     * leaves positions, velocities, time and step count as they were.
      *
      * forcesAreValid -- in: the Context's forces are those at the current positions for the
      * integration force groups; out: true after a step.
@@ -109,6 +114,10 @@ public:
     static std::string Name() {
         return "IntegrateMRattleStep";
     }
+    /** The integrator's class name, which messages name it by on every platform. */
+    static std::string IntegratorName() {
+        return "MRattleIntegrator";
+    }
     IntegrateMRattleStepKernel(const std::string& name, const OpenMM::Platform& platform) : RigidBodyKernel(name, platform) {
     }
     ~IntegrateMRattleStepKernel() override;
@@ -123,6 +132,10 @@ class OPENMM_EXPORT_MRATTLE IntegrateMRattleLangevinStepKernel : public RigidBod
 public:
     static std::string Name() {
         return "IntegrateMRattleLangevinStep";
+    }
+    /** The integrator's class name, which messages name it by on every platform. */
+    static std::string IntegratorName() {
+        return "MRattleLangevinIntegrator";
     }
     IntegrateMRattleLangevinStepKernel(const std::string& name, const OpenMM::Platform& platform)
         : RigidBodyKernel(name, platform) {
@@ -139,6 +152,10 @@ class OPENMM_EXPORT_MRATTLE IntegrateMRattleNoseHooverStepKernel : public RigidB
 public:
     static std::string Name() {
         return "IntegrateMRattleNoseHooverStep";
+    }
+    /** The integrator's class name, which messages name it by on every platform. */
+    static std::string IntegratorName() {
+        return "MRattleNoseHooverIntegrator";
     }
     IntegrateMRattleNoseHooverStepKernel(const std::string& name, const OpenMM::Platform& platform)
         : RigidBodyKernel(name, platform) {
@@ -158,6 +175,10 @@ public:
     static std::string Name() {
         return "IntegrateMRattleBussiStep";
     }
+    /** The integrator's class name, which messages name it by on every platform. */
+    static std::string IntegratorName() {
+        return "MRattleBussiIntegrator";
+    }
     IntegrateMRattleBussiStepKernel(const std::string& name, const OpenMM::Platform& platform)
         : RigidBodyKernel(name, platform) {
     }
@@ -175,6 +196,10 @@ class OPENMM_EXPORT_MRATTLE IntegrateRigidSplittingStepKernel : public RigidBody
 public:
     static std::string Name() {
         return "IntegrateRigidSplittingStep";
+    }
+    /** The integrator's class name, which messages name it by on every platform. */
+    static std::string IntegratorName() {
+        return "RigidSplittingIntegrator";
     }
     IntegrateRigidSplittingStepKernel(const std::string& name, const OpenMM::Platform& platform)
         : RigidBodyKernel(name, platform) {

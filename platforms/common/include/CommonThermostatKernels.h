@@ -60,7 +60,7 @@ class CommonIntegrateMRattleNoseHooverStepKernel
 public:
     CommonIntegrateMRattleNoseHooverStepKernel(const std::string& name, const OpenMM::Platform& platform,
                                                OpenMM::ComputeContext& cc)
-        : CommonVelocityScalingStepKernel(name, platform, cc, "MRattleNoseHooverIntegrator") {
+        : CommonVelocityScalingStepKernel(name, platform, cc, IntegrateMRattleNoseHooverStepKernel::IntegratorName()) {
     }
     /** Reads the chain from the device (not a per-step cost: only when asked). */
     double computeHeatBathEnergy(OpenMM::ContextImpl& context, const MRattleNoseHooverIntegrator& integrator) override;
@@ -88,7 +88,7 @@ class CommonIntegrateMRattleBussiStepKernel : public CommonVelocityScalingStepKe
 public:
     CommonIntegrateMRattleBussiStepKernel(const std::string& name, const OpenMM::Platform& platform,
                                           OpenMM::ComputeContext& cc)
-        : CommonVelocityScalingStepKernel(name, platform, cc, "MRattleBussiIntegrator") {
+        : CommonVelocityScalingStepKernel(name, platform, cc, IntegrateMRattleBussiStepKernel::IntegratorName()) {
     }
     /** Reads the work from the device (only when asked). */
     double computeHeatBathEnergy(OpenMM::ContextImpl& context) override;

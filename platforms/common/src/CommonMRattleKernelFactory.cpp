@@ -21,27 +21,44 @@ std::string hostPlatformNames() {
     return names;
 }
 
+/** A kernel of the device platforms: its name (the interface's Name()) and how to make it. */
+struct CommonKernel {
+    std::string (*name)();
+    KernelImpl* (*create)(const std::string& name, const Platform& platform, ComputeContext& cc);
+};
+
+template <class Kernel>
+KernelImpl* make(const std::string& name, const Platform& platform, ComputeContext& cc) {
+    return new Kernel(name, platform, cc);
+}
+
+/** The splitting baseline has no device kernel: refused naming the platforms that run it. */
+KernelImpl* refuseRigidSplitting(const std::string& name, const Platform& platform, ComputeContext& cc) {
+    throw OpenMMException(IntegrateRigidSplittingStepKernel::IntegratorName() + " (the paper's baseline) runs on the " +
+                          hostPlatformNames() + " platforms only, not on " + platform.getName() +
+                          "; the plugin's other integrators run there. Create its Context on one of those "
+                          "(Platform::getPlatformByName).");
+}
+
+/** The kernels of the device platforms (OpenCL, CUDA): registered and created from this list alone. */
+const CommonKernel Kernels[] = {
+    {IntegrateMRattleStepKernel::Name, make<CommonIntegrateMRattleStepKernel>},
+    {IntegrateMRattleLangevinStepKernel::Name, make<CommonIntegrateMRattleLangevinStepKernel>},
+    {IntegrateMRattleNoseHooverStepKernel::Name, make<CommonIntegrateMRattleNoseHooverStepKernel>},
+    {IntegrateMRattleBussiStepKernel::Name, make<CommonIntegrateMRattleBussiStepKernel>},
+    {IntegrateRigidSplittingStepKernel::Name, refuseRigidSplitting},
+};
+
 } // namespace
 
 KernelImpl* MRattlePlugin::createCommonKernel(const std::string& name, const Platform& platform, ComputeContext& cc) {
-    if (name == IntegrateMRattleStepKernel::Name())
-        return new CommonIntegrateMRattleStepKernel(name, platform, cc);
-    if (name == IntegrateMRattleLangevinStepKernel::Name())
-        return new CommonIntegrateMRattleLangevinStepKernel(name, platform, cc);
-    if (name == IntegrateMRattleNoseHooverStepKernel::Name())
-        return new CommonIntegrateMRattleNoseHooverStepKernel(name, platform, cc);
-    if (name == IntegrateMRattleBussiStepKernel::Name())
-        return new CommonIntegrateMRattleBussiStepKernel(name, platform, cc);
-    if (name == IntegrateRigidSplittingStepKernel::Name())
-        throw OpenMMException("RigidSplittingIntegrator (the paper's baseline) runs on the " + hostPlatformNames() +
-                              " platforms only, not on " + platform.getName() + "; the plugin's other integrators run there. Create its Context on one of those (Platform::getPlatformByName).");
+    for (const CommonKernel& kernel : Kernels)
+        if (name == kernel.name())
+            return kernel.create(name, platform, cc);
     throw OpenMMException("The M-RATTLE plugin has no kernel named '" + name + "' on " + platform.getName());
 }
 
 void MRattlePlugin::registerCommonKernels(Platform& platform, KernelFactory* factory) {
-    platform.registerKernelFactory(IntegrateMRattleStepKernel::Name(), factory);
-    platform.registerKernelFactory(IntegrateMRattleLangevinStepKernel::Name(), factory);
-    platform.registerKernelFactory(IntegrateMRattleNoseHooverStepKernel::Name(), factory);
-    platform.registerKernelFactory(IntegrateMRattleBussiStepKernel::Name(), factory);
-    platform.registerKernelFactory(IntegrateRigidSplittingStepKernel::Name(), factory);
+    for (const CommonKernel& kernel : Kernels)
+        platform.registerKernelFactory(kernel.name(), factory);
 }

@@ -28,13 +28,13 @@ void CommonVelocityScalingStepKernel<StepKernel>::execute(ContextImpl& context, 
     // forces, half kick and projection), then the thermostat's second half step.
     dynamics.beginStep(context, integrator, forcesAreValid);
     backUpState();
-    halfStep(integrator);
-    dynamics.driftAndReset(0.5 * h, h, tolerance);
-    dynamics.computeForces(context, integrator, forcesAreValid);
-    dynamics.kick(0.5 * h);
-    dynamics.project(tolerance, false);
-    halfStep(integrator);
     try {
+        halfStep(integrator);
+        dynamics.driftAndReset(0.5 * h, h, tolerance);
+        dynamics.computeForces(context, integrator, forcesAreValid);
+        dynamics.kick(0.5 * h);
+        dynamics.project(tolerance, false);
+        halfStep(integrator);
         dynamics.endStep(h, forcesAreValid);
     } catch (...) {
         restoreState();  // the particles are put back by endStep; the thermostat here

@@ -7,16 +7,11 @@
 
 namespace MRattlePlugin {
 
-/** M-RATTLE on the Reference platform, also registered on the CPU platform. */
+/** MRattleIntegrator on the Reference platform, also registered on the CPU platform: velocity Verlet with M-RATTLE's resets. */
 class ReferenceIntegrateMRattleStepKernel : public ReferenceRigidBodyStepKernel<IntegrateMRattleStepKernel> {
 public:
     using ReferenceRigidBodyStepKernel::ReferenceRigidBodyStepKernel;
-
-protected:
-    void integratePositions(OpenMM::ContextImpl& context, const MRattleIntegrator& integrator) override;
-    const char* integratorName() const override {
-        return "MRattleIntegrator";
-    }
+    void execute(OpenMM::ContextImpl& context, const MRattleIntegrator& integrator, bool& forcesAreValid) override;
 };
 
 } // namespace MRattlePlugin

@@ -8,27 +8,23 @@
 namespace MRattlePlugin {
 
 /**
- * Langevin dynamics with M-RATTLE on the Reference platform, also registered on the CPU
- * platform. Leapfrog like LangevinMiddleIntegrator: the velocities it keeps are those of
- * the middle of the step (after the noise), so its step is a full kick and there is no
- * closing half kick.
+ * MRattleLangevinIntegrator on the Reference platform, also registered on the CPU platform:
+ * LangevinMiddle's splitting with each drift reset by M-RATTLE and the velocities projected
+ * after the kick and after the noise (the kernel's random stream, which checkpoints hold).
+ * Leapfrog: the velocities it keeps are those of the middle of the step.
  */
 class ReferenceIntegrateMRattleLangevinStepKernel : public ReferenceRigidBodyStepKernel<IntegrateMRattleLangevinStepKernel> {
 public:
     using ReferenceRigidBodyStepKernel::ReferenceRigidBodyStepKernel;
-    /** The shared set-up, then the noise's stream seeded now (so a checkpoint before the first step holds it). */
-    void initialize(const OpenMM::System& system, const RigidBodyTopology& topology,
-                    const RigidBodyIntegrator& integrator) override;
+    void execute(OpenMM::ContextImpl& context, const MRattleLangevinIntegrator& integrator, bool& forcesAreValid) override;
 
 protected:
-    void finishStep(OpenMM::ContextImpl& context, const MRattleLangevinIntegrator& integrator) override;
-    void integratePositions(OpenMM::ContextImpl& context, const MRattleLangevinIntegrator& integrator) override;
-    const char* integratorName() const override {
-        return "MRattleLangevinIntegrator";
-    }
+    /** The noise's stream seeded now (so a checkpoint before the first step holds it). */
+    void initializeIntegrator(const OpenMM::System& system, const MRattleLangevinIntegrator& integrator) override;
 
 private:
-    std::vector<OpenMM::Vec3> kicked, middlePositions, middleVelocities;  // step buffers
+    /** Ornstein-Uhlenbeck over time h on every massive particle's velocity. */
+    void addNoise(double friction, double temperature, double h);
 };
 
 } // namespace MRattlePlugin

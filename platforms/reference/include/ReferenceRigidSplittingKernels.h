@@ -7,16 +7,22 @@
 
 namespace MRattlePlugin {
 
-/** The splitting baseline on the Reference platform, also registered on the CPU platform. */
+/**
+ * RigidSplittingIntegrator (the splitting baseline) on the Reference platform, also
+ * registered on the CPU platform: velocity Verlet whose position update is a free-rotor
+ * splitting per body.
+ */
 class ReferenceIntegrateRigidSplittingStepKernel : public ReferenceRigidBodyStepKernel<IntegrateRigidSplittingStepKernel> {
 public:
     using ReferenceRigidBodyStepKernel::ReferenceRigidBodyStepKernel;
+    void execute(OpenMM::ContextImpl& context, const RigidSplittingIntegrator& integrator, bool& forcesAreValid) override;
 
-protected:
-    void integratePositions(OpenMM::ContextImpl& context, const RigidSplittingIntegrator& integrator) override;
-    const char* integratorName() const override {
-        return "RigidSplittingIntegrator";
-    }
+private:
+    /**
+     * Half kick and drift of the free particles with RATTLE for their constraints, and each
+     * body's rotor splitting, into the step buffers, which then become the state.
+     */
+    void rotorPositionStep(double h, double tolerance);
 };
 
 } // namespace MRattlePlugin

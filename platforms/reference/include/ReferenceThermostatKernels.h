@@ -12,10 +12,10 @@ namespace MRattlePlugin {
 
 /**
  * Velocity Verlet with M-RATTLE between two half steps of a thermostat that scales every
- * velocity by one factor (the Nose-Hoover chain, CSVR) on the Reference and CPU platforms:
- * scale, half kick, drift and reset, forces, half kick and projection, scale. A subclass
- * supplies the factor over half a step and saves and restores its state, so that a failed
- * step leaves the thermostat as it was (as the step contract leaves the particles).
+ * velocity by one factor (the Nose-Hoover chain, CSVR), on the Reference and CPU platforms;
+ * execute() reads line for line like CommonVelocityScalingStepKernel's. The thermostat's
+ * state is copied at the start of each step and put back if the step fails, as the
+ * particles are. A subclass supplies the factor over half a step and the state.
  */
 template <class StepKernel>
 class ReferenceVelocityScalingStepKernel : public ReferenceRigidBodyStepKernel<StepKernel> {
@@ -23,30 +23,22 @@ public:
     typedef ReferenceRigidBodyStepKernel<StepKernel> Base;
     typedef typename Base::Integrator Integrator;
     using Base::Base;
-    void execute(OpenMM::ContextImpl& context, const Integrator& integrator, bool& forcesAreValid) override {
-        saveThermostat();
-        try {
-            Base::execute(context, integrator, forcesAreValid);
-        } catch (...) {
-            restoreThermostat();
-            throw;
-        }
-    }
+    void execute(OpenMM::ContextImpl& context, const Integrator& integrator, bool& forcesAreValid) override;
 
 protected:
     /** The thermostat over half a step at this kinetic energy: the factor that scales every velocity. */
     virtual double halfStepScale(double kineticEnergy, const Integrator& integrator) = 0;
-    virtual void saveThermostat() = 0;
-    virtual void restoreThermostat() = 0;
+    /** Copy the thermostat's state aside, or put the copy back. */
+    virtual void backUpState() = 0;
+    virtual void restoreState() = 0;
     /** The System's degrees of freedom, by the plugin's rule (RigidBodyTopology). */
-    double degreesOfFreedom() const {
-        return this->dynamics->topology().getNumDegreesOfFreedom(this->dynamics->getBodyDegreesOfFreedom());
+    double degreesOfFreedom() {
+        return this->dynamics.operations().topology().getNumDegreesOfFreedom(this->dynamics.bodyDegreesOfFreedom());
     }
-    void integratePositions(OpenMM::ContextImpl& context, const Integrator& integrator) override;
-    void finishStep(OpenMM::ContextImpl& context, const Integrator& integrator) override;
 
 private:
-    std::vector<OpenMM::Vec3> scaled;  // step buffer: the velocities after the first half step of the thermostat
+    /** The thermostat's half step: every velocity scaled by halfStepScale(). */
+    void halfStep(const Integrator& integrator);
 };
 
 /** MRattleNoseHooverIntegrator on the Reference platform, also registered on the CPU platform. */
@@ -54,23 +46,19 @@ class ReferenceIntegrateMRattleNoseHooverStepKernel
     : public ReferenceVelocityScalingStepKernel<IntegrateMRattleNoseHooverStepKernel> {
 public:
     using ReferenceVelocityScalingStepKernel::ReferenceVelocityScalingStepKernel;
-    /** The shared set-up, then a chain of the integrator's length at rest. */
-    void initialize(const OpenMM::System& system, const RigidBodyTopology& topology,
-                    const RigidBodyIntegrator& integrator) override;
     double computeHeatBathEnergy(OpenMM::ContextImpl& context, const MRattleNoseHooverIntegrator& integrator) override;
     void createCheckpoint(OpenMM::ContextImpl& context, std::ostream& stream) const override;
     void loadCheckpoint(OpenMM::ContextImpl& context, std::istream& stream) override;
 
 protected:
+    /** A chain of the integrator's length, at rest. */
+    void initializeIntegrator(const OpenMM::System& system, const MRattleNoseHooverIntegrator& integrator) override;
     double halfStepScale(double kineticEnergy, const MRattleNoseHooverIntegrator& integrator) override;
-    void saveThermostat() override {
+    void backUpState() override {
         savedChain = chain;
     }
-    void restoreThermostat() override {
+    void restoreState() override {
         chain = savedChain;
-    }
-    const char* integratorName() const override {
-        return "MRattleNoseHooverIntegrator";
     }
 
 private:
@@ -81,9 +69,6 @@ private:
 class ReferenceIntegrateMRattleBussiStepKernel : public ReferenceVelocityScalingStepKernel<IntegrateMRattleBussiStepKernel> {
 public:
     using ReferenceVelocityScalingStepKernel::ReferenceVelocityScalingStepKernel;
-    /** The shared set-up, then the stream seeded now (so a checkpoint before the first step holds it). */
-    void initialize(const OpenMM::System& system, const RigidBodyTopology& topology,
-                    const RigidBodyIntegrator& integrator) override;
     double computeHeatBathEnergy(OpenMM::ContextImpl& context) override {
         return -work;
     }
@@ -91,17 +76,16 @@ public:
     void loadCheckpoint(OpenMM::ContextImpl& context, std::istream& stream) override;
 
 protected:
+    /** The stream seeded now (so a checkpoint before the first step holds it); no work yet. */
+    void initializeIntegrator(const OpenMM::System& system, const MRattleBussiIntegrator& integrator) override;
     double halfStepScale(double kineticEnergy, const MRattleBussiIntegrator& integrator) override;
-    void saveThermostat() override {
-        savedRandom = dynamics->random();
+    void backUpState() override {
+        savedRandom = dynamics.operations().random();
         savedWork = work;
     }
-    void restoreThermostat() override {
-        dynamics->random() = savedRandom;
+    void restoreState() override {
+        dynamics.operations().random() = savedRandom;
         work = savedWork;
-    }
-    const char* integratorName() const override {
-        return "MRattleBussiIntegrator";
     }
 
 private:

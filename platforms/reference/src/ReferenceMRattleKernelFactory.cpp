@@ -12,22 +12,27 @@
 using namespace MRattlePlugin;
 using namespace OpenMM;
 
-KernelImpl* ReferenceMRattleKernelFactory::createKernelImpl(std::string name, const Platform& platform,
-                                                            ContextImpl& context) const {
-    if (name == IntegrateMRattleStepKernel::Name())
-        return new ReferenceIntegrateMRattleStepKernel(name, platform);
-    if (name == IntegrateRigidSplittingStepKernel::Name())
-        return new ReferenceIntegrateRigidSplittingStepKernel(name, platform);
-    if (name == IntegrateMRattleLangevinStepKernel::Name())
-        return new ReferenceIntegrateMRattleLangevinStepKernel(name, platform);
-    if (name == IntegrateMRattleNoseHooverStepKernel::Name())
-        return new ReferenceIntegrateMRattleNoseHooverStepKernel(name, platform);
-    if (name == IntegrateMRattleBussiStepKernel::Name())
-        return new ReferenceIntegrateMRattleBussiStepKernel(name, platform);
-    throw OpenMMException("ReferenceMRattleKernelFactory: no kernel named '" + name + "'");
+namespace {
+
+/** A kernel of this platform: its name (the interface's Name()) and how to make it. */
+struct ReferenceKernel {
+    std::string (*name)();
+    KernelImpl* (*create)(const std::string& name, const Platform& platform);
+};
+
+template <class Kernel>
+KernelImpl* make(const std::string& name, const Platform& platform) {
+    return new Kernel(name, platform);
 }
 
-namespace {
+/** The kernels of the Reference and CPU platforms: registered and created from this list alone. */
+const ReferenceKernel Kernels[] = {
+    {IntegrateMRattleStepKernel::Name, make<ReferenceIntegrateMRattleStepKernel>},
+    {IntegrateRigidSplittingStepKernel::Name, make<ReferenceIntegrateRigidSplittingStepKernel>},
+    {IntegrateMRattleLangevinStepKernel::Name, make<ReferenceIntegrateMRattleLangevinStepKernel>},
+    {IntegrateMRattleNoseHooverStepKernel::Name, make<ReferenceIntegrateMRattleNoseHooverStepKernel>},
+    {IntegrateMRattleBussiStepKernel::Name, make<ReferenceIntegrateMRattleBussiStepKernel>},
+};
 
 /** A platform of the build's list that this plugin serves (Reference and CPU; the CPU platform derives from Reference). */
 bool isHostPlatform(const std::string& name) {
@@ -49,16 +54,21 @@ void registerOnReferenceAndCpu() {
         if (isHostPlatform(platform.getName())) {
             // One factory per platform: each Platform deletes the factories it holds.
             ReferenceMRattleKernelFactory* factory = new ReferenceMRattleKernelFactory();
-            platform.registerKernelFactory(IntegrateMRattleStepKernel::Name(), factory);
-            platform.registerKernelFactory(IntegrateRigidSplittingStepKernel::Name(), factory);
-            platform.registerKernelFactory(IntegrateMRattleLangevinStepKernel::Name(), factory);
-            platform.registerKernelFactory(IntegrateMRattleNoseHooverStepKernel::Name(), factory);
-            platform.registerKernelFactory(IntegrateMRattleBussiStepKernel::Name(), factory);
+            for (const ReferenceKernel& kernel : Kernels)
+                platform.registerKernelFactory(kernel.name(), factory);
         }
     }
 }
 
 } // namespace
+
+KernelImpl* ReferenceMRattleKernelFactory::createKernelImpl(std::string name, const Platform& platform,
+                                                            ContextImpl& context) const {
+    for (const ReferenceKernel& kernel : Kernels)
+        if (name == kernel.name())
+            return kernel.create(name, platform);
+    throw OpenMMException("ReferenceMRattleKernelFactory: no kernel named '" + name + "'");
+}
 
 extern "C" OPENMM_EXPORT void registerPlatforms() {
 }

@@ -1,13 +1,12 @@
 #include "ReferenceRigidBodyDynamics.h"
 #include "HostRigidBodyRules.h"
+#include "RigidBodyIntegrator.h"
 #include "openmm/AndersenThermostat.h"
 #include "openmm/OpenMMException.h"
+#include "openmm/internal/ContextImpl.h"
+#include "openmm/kernels.h"
 #include "openmm/reference/ReferencePlatform.h"
-#include "openmm/reference/SimTKOpenMMRealType.h"
-#include <algorithm>
 #include <cmath>
-#include <sstream>
-#include <string>
 
 using namespace MRattlePlugin;
 using namespace OpenMM;
@@ -20,371 +19,198 @@ ReferencePlatform::PlatformData& platformData(ContextImpl& context) {
     return *reinterpret_cast<ReferencePlatform::PlatformData*>(context.getPlatformData());
 }
 
-/**
- * A free constraint is refused when its error exceeds this many times the tolerance (CCMA
- * stops within 1x when it converges; the slack is for round-off, SETTLE's included).
- */
-const double ConstraintCheckSlack = 2;
-
-} // namespace
-
-ReferenceRigidBodyDynamics::ReferenceRigidBodyDynamics(const System& system, const RigidBodyTopology& topology)
-    : bodies(topology) {
-    const int n = system.getNumParticles();
-    inverseMass.resize(n);
-    for (int i = 0; i < n; i++) {
-        double mass = system.getParticleMass(i);
-        inverseMass[i] = (mass == 0.0 ? 0.0 : 1.0 / mass);
-    }
-    shapes.assign(bodies.getNumBodies(), RigidBodyMath::Shape::General);
-    for (int b = 0; b < bodies.getNumBodies(); b++) {
-        const vector<int>& atoms = bodies.getBodyParticles(b);
-        views.push_back(RigidBodyMath::BodyView{atoms.data(), (int) atoms.size(), bodies.getMasses().data(),
-                                                bodies.getBodyMass(b), false});
-    }
-    vector<bool> free(n, false);
-    for (int i : bodies.getFreeParticles())
-        free[i] = true;
-    for (int i = 0; i < n; i++)
-        if (bodies.getBodyOfParticle(i) < 0 && !free[i])
-            otherParticles.push_back(i);
-    if (!bodies.getFreeConstraints().empty()) {
-        // OpenMM's constraint code (CCMA, SETTLE for rigid water) on the free constraints only.
-        System freeSystem;
-        for (int i = 0; i < n; i++)
-            freeSystem.addParticle(system.getParticleMass(i));
-        for (int c : bodies.getFreeConstraints()) {
-            int p1, p2;
-            double distance;
-            system.getConstraintParameters(c, p1, p2, distance);
-            freeSystem.addConstraint(p1, p2, distance);
-            freeConstraintAtoms.push_back({p1, p2});
-            freeConstraintDistances.push_back(distance);
-        }
-        freeConstraints.reset(new ReferenceConstraints(freeSystem));
-    }
-    for (int f = 0; f < system.getNumForces(); f++)
-        if (const AndersenThermostat* thermostat = dynamic_cast<const AndersenThermostat*>(&system.getForce(f))) {
-            andersen = true;
-            int seed = thermostat->getRandomNumberSeed();
-            collisionRandom.seed(seed != 0 ? (uint64_t) seed : (uint64_t) std::random_device()());
-            randomIsSet = true;
-        }
-}
-
-vector<Vec3>& ReferenceRigidBodyDynamics::positions(ContextImpl& context) {
+vector<Vec3>& positionsOf(ContextImpl& context) {
     return *platformData(context).positions;
 }
 
-vector<Vec3>& ReferenceRigidBodyDynamics::velocities(ContextImpl& context) {
+vector<Vec3>& velocitiesOf(ContextImpl& context) {
     return *platformData(context).velocities;
 }
 
-vector<Vec3>& ReferenceRigidBodyDynamics::forces(ContextImpl& context) {
-    return *platformData(context).forces;
+} // namespace
+
+ReferenceRigidBodyDynamics::ReferenceRigidBodyDynamics(const std::string& integratorName)
+    : integratorName(integratorName) {
 }
 
-void ReferenceRigidBodyDynamics::advanceClock(ContextImpl& context, double stepSize) {
-    ReferencePlatform::PlatformData& data = platformData(context);
+void ReferenceRigidBodyDynamics::initialize(const System& system, const RigidBodyTopology& topology) {
+    ops.reset(new ReferenceRigidBodyOperations(system, topology));
+    shapes.reset(new BodyShapeConstraints(system, topology));
+    nextPositions.resize(system.getNumParticles());
+    nextVelocities.resize(system.getNumParticles());
+    hasVirtualSites = false;
+    for (int i = 0; i < system.getNumParticles(); i++)
+        hasVirtualSites |= system.isVirtualSite(i);
+}
+
+// ---- The phases of a step ----------------------------------------------------------------
+
+void ReferenceRigidBodyDynamics::beginStep(ContextImpl& context, const RigidBodyIntegrator& integrator,
+                                           bool& forcesAreValid) {
+    stepContext = &context;
+    if (!threadsChecked) {
+        // The platform's properties cannot be asked for while the Context is being made.
+        threadsChecked = true;
+        if (context.getPlatform().getName() == "CPU")
+            ops->setThreads(std::stoi(context.getPlatform().getPropertyValue(context.getOwner(), "Threads")));
+    }
+    if (ops->hasAndersenThermostat())
+        ops->collideBodies(positions(), velocities(), context.getParameter(AndersenThermostat::Temperature()),
+                           integrator.getConstraintTolerance());
+    if (!forcesAreValid)
+        context.calcForcesAndEnergy(true, false, integrator.getIntegrationForceGroups());
+    startPositions = positions();
+    startVelocities = velocities();
+}
+
+void ReferenceRigidBodyDynamics::driftAndReset(double kickTime, double h, double tolerance) {
+    // Into the step buffers, which then become the state: a body that finds no rotation
+    // leaves the Context as it was.
+    ownPhase([&] {
+        ops->driftAndReset(positions(), velocities(), h, tolerance, nextPositions, nextVelocities,
+                           kickTime != 0 ? &forces() : nullptr, kickTime);
+        acceptNewState();
+    });
+}
+
+void ReferenceRigidBodyDynamics::kick(double time) {
+    ops->kick(velocities(), forces(), time);
+}
+
+void ReferenceRigidBodyDynamics::project(double tolerance, bool onlyIfNotRigid) {
+    ownPhase([&] {
+        if (onlyIfNotRigid)
+            ops->projectNonRigidVelocities(positions(), velocities(), tolerance);
+        else
+            ops->projectVelocities(positions(), velocities(), tolerance);
+    });
+}
+
+void ReferenceRigidBodyDynamics::computeForces(ContextImpl& context, const RigidBodyIntegrator& integrator,
+                                               bool& forcesAreValid) {
+    forcesAreValid = false;
+    ownPhase([&] {
+        // OpenMM's Reference code loops over every particle to find virtual sites: skipped without any.
+        if (hasVirtualSites)
+            context.computeVirtualSites();
+        context.calcForcesAndEnergy(true, false, integrator.getIntegrationForceGroups());
+    });
+}
+
+void ReferenceRigidBodyDynamics::endStep(double stepSize, bool& forcesAreValid) {
+    ownPhase([&] { requireFiniteStepResult(); });
+    ReferencePlatform::PlatformData& data = platformData(*stepContext);
     data.time += stepSize;
     data.stepCount++;
+    forcesAreValid = true;
+    stepContext = nullptr;
 }
 
-RigidBodyMath::Kick ReferenceRigidBodyDynamics::kickOf(const vector<Vec3>* forces, double time) const {
-    RigidBodyMath::Kick kick;
-    if (forces != nullptr) {
-        kick.forces = coordinates(*forces);
-        kick.inverseMasses = inverseMass.data();
-        kick.time = time;
-    }
-    return kick;
-}
-
-void ReferenceRigidBodyDynamics::setThreads(int count) {
-    numThreads = std::max(count, 1);
-    if (numThreads > 1)
-        helpers.reset(new ThreadPool(numThreads - 1));
-    else
-        helpers.reset();
-}
-
-void ReferenceRigidBodyDynamics::forEachThread(const std::function<void(int)>& work) {
-    // The calling thread takes a share instead of sleeping until the helpers finish. Waking
-    // all the workers of a pool at once lets the scheduler put two of them on the one idle
-    // core while the caller's core then idles (measured: 2 threads no faster than 1 on 2
-    // cores); a caller that keeps working keeps its core busy.
-    helpers->execute([&](ThreadPool&, int thread) { work(thread); });
+void ReferenceRigidBodyDynamics::ownPhase(const std::function<void()>& work) {
     try {
-        work(numThreads - 1);
+        work();
+    } catch (const OpenMMException& e) {
+        failStep(e.what());
+    }
+}
+
+vector<Vec3>& ReferenceRigidBodyDynamics::positions() {
+    return positionsOf(*stepContext);
+}
+
+vector<Vec3>& ReferenceRigidBodyDynamics::velocities() {
+    return velocitiesOf(*stepContext);
+}
+
+const vector<Vec3>& ReferenceRigidBodyDynamics::forces() {
+    return *platformData(*stepContext).forces;
+}
+
+void ReferenceRigidBodyDynamics::acceptNewState() {
+    positions().swap(nextPositions);
+    velocities().swap(nextVelocities);
+}
+
+void ReferenceRigidBodyDynamics::failStep(const std::string& what) {
+    positions() = startPositions;
+    velocities() = startVelocities;
+    stepContext = nullptr;
+    throw OpenMMException(integratorName + ": " + what +
+                          "; the step was not taken (positions and velocities are as before it)");
+}
+
+void ReferenceRigidBodyDynamics::requireFiniteStepResult() {
+    const vector<Vec3>& x = positions();
+    const vector<Vec3>& v = velocities();
+    const vector<Vec3>& f = forces();
+    const vector<double>& inverseMass = ops->inverseMasses();
+    for (size_t i = 0; i < x.size(); i++) {
+        if (inverseMass[i] == 0)
+            continue;  // massless: never integrated, finite since set
+        const char* what = !std::isfinite(x[i][0] + x[i][1] + x[i][2])   ? "position"
+                           : !std::isfinite(f[i][0] + f[i][1] + f[i][2]) ? "force at the new positions"
+                           : !std::isfinite(v[i][0] + v[i][1] + v[i][2]) ? "velocity"
+                                                                         : nullptr;
+        if (what != nullptr)
+            throw OpenMMException(std::string("the ") + what + " of particle " + std::to_string(i) + " is not finite");
+    }
+}
+
+// ---- RigidBodyKernel's work --------------------------------------------------------------
+
+void ReferenceRigidBodyDynamics::updateShapes(ContextImpl& context) {
+    vector<Vec3>& x = positionsOf(context);
+    HostRigidBodyRules::requireFinite(x, "position");
+    if (shapes->apply(x))
+        context.computeVirtualSites();
+    ops->updateShapes(x);
+}
+
+void ReferenceRigidBodyDynamics::projectVelocities(ContextImpl& context, double tolerance) {
+    vector<Vec3>& v = velocitiesOf(context);
+    HostRigidBodyRules::requireFinite(v, "velocity");
+    const vector<Vec3> given = v;  // only when velocities are set, not in the step
+    try {
+        ops->projectNonRigidVelocities(positionsOf(context), v, tolerance);
+        HostRigidBodyRules::requireFinite(v, "velocity projected at the current positions (a degenerate constraint?)");
     } catch (...) {
-        helpers->waitForThreads();  // the helpers still use work's captures
+        v = given;  // a refused projection (not finite, or constraints not converged) changes nothing
         throw;
     }
-    helpers->waitForThreads();
 }
 
-int ReferenceRigidBodyDynamics::forEachBody(const std::function<bool(int)>& work) {
-    return forEachBodyRangeAndFreeParticle(
-        [&](int begin, int end) {
-            for (int b = begin; b < end; b++)
-                if (!work(b))
-                    return b;
-            return INT_MAX;
-        },
-        nullptr);
-}
-
-int ReferenceRigidBodyDynamics::forEachBodyRangeAndFreeParticle(const std::function<int(int, int)>& work,
-                                                                const std::function<void(int, int)>& freeWork) {
-    const int numBodies = bodies.getNumBodies();
-    const int numFree = bodies.getFreeParticles().size();
-    // A parallel region costs microseconds, a body a fraction of one: only many bodies pay.
-    if (numThreads == 1 || numBodies < 256) {
-        if (freeWork)
-            freeWork(0, numFree);
-        return work(0, numBodies);
-    }
-    vector<int> firstFailure(numThreads, INT_MAX);
-    forEachThread([&](int thread) {
-        if (freeWork)
-            freeWork((long long) numFree * thread / numThreads, (long long) numFree * (thread + 1) / numThreads);
-        firstFailure[thread] = work((long long) numBodies * thread / numThreads,
-                                    (long long) numBodies * (thread + 1) / numThreads);
-    });
-    return *std::min_element(firstFailure.begin(), firstFailure.end());
-}
-
-void ReferenceRigidBodyDynamics::forEachParticleRange(const std::function<void(int, int)>& work) {
-    const int numParticles = inverseMass.size();
-    // A particle costs nanoseconds: only large systems pay for a parallel region.
-    if (numThreads == 1 || numParticles < 4096) {
-        work(0, numParticles);
-        return;
-    }
-    forEachThread([&](int thread) {
-        work((long long) numParticles * thread / numThreads, (long long) numParticles * (thread + 1) / numThreads);
-    });
-}
-
-void ReferenceRigidBodyDynamics::updateShapes(const vector<Vec3>& positions) {
-    shapes = HostRigidBodyRules::classifyShapes(bodies, positions);
-    // A point rotates no more than a line does: both take the linear body's arithmetic.
-    for (int b = 0; b < bodies.getNumBodies(); b++)
-        views[b].linear = (shapes[b] != RigidBodyMath::Shape::General);
-}
-
-int ReferenceRigidBodyDynamics::getBodyDegreesOfFreedom() const {
-    return HostRigidBodyRules::bodyDegreesOfFreedom(shapes);
-}
-
-void ReferenceRigidBodyDynamics::seedRandom(int seed) {
-    if (randomIsSet)
-        return;
-    collisionRandom.seed(seed != 0 ? (uint64_t) seed : (uint64_t) std::random_device()());
-    randomIsSet = true;
-}
-
-void ReferenceRigidBodyDynamics::driftAndReset(vector<Vec3>& x, const vector<Vec3>& v, double h, double tolerance,
-                                               vector<Vec3>& newPositions, vector<Vec3>& newVelocities,
-                                               const vector<Vec3>* forces, double kickTime) {
-    // A free particle's velocity after the kick (if forces are given; free particles are massive).
-    auto kicked = [&](int i) { return forces != nullptr ? v[i] + (*forces)[i] * (kickTime * inverseMass[i]) : v[i]; };
-    for (int i : otherParticles) {   // massless: they do not move by themselves
-        newVelocities[i] = v[i];
-        newPositions[i] = x[i];
-    }
-    // One parallel region: free particles' drifts (their velocities come from the constrained
-    // displacement below), and each body's kick, drift and reset in the same passes over its
-    // atoms (the body's new positions and velocities are formed from displacements).
-    const vector<int>& freeParticles = bodies.getFreeParticles();
-    const double* oldPositions = coordinates(x);
-    const double* oldVelocities = coordinates(v);
-    double* velocitiesOut = coordinates(newVelocities);
-    double* positionsOut = coordinates(newPositions);
-    const RigidBodyMath::Kick kick = kickOf(forces, kickTime);
-    const int failed = forEachBodyRangeAndFreeParticle(
-        [&](int begin, int end) {
-            const int failed = RigidBodyMath::kickDriftAndResetBodies(views.data() + begin, end - begin, kick, h,
-                                                                      oldPositions, oldVelocities, positionsOut,
-                                                                      velocitiesOut);
-            return failed < end - begin ? begin + failed : INT_MAX;
-        },
-        [&](int begin, int end) {
-            for (int k = begin; k < end; k++) {
-                const int i = freeParticles[k];
-                newPositions[i] = x[i] + kicked(i) * h;
-            }
-        });
-    // Free particles: RATTLE for their constraints, velocities from the displacement.
-    constrainFreePositions(x, newPositions, tolerance);
-    const double inverseStep = 1.0 / h;
-    for (int i : freeParticles) {
-        newVelocities[i] = (newPositions[i] - x[i]) * inverseStep;
-        if (!std::isfinite(newPositions[i][0] + newPositions[i][1] + newPositions[i][2] + newVelocities[i][0] +
-                           newVelocities[i][1] + newVelocities[i][2]))
-            throw OpenMMException("particle " + std::to_string(i) +
-                                  " would move to a position that is not finite; its force or velocity is not finite");
-    }
-    if (failed != INT_MAX)
-        throw OpenMMException("the position reset of rigid body " + std::to_string(failed) + " found no rotation in " +
-                              std::to_string(RigidBodyMath::MaxRotationIterations) +
-                              " Newton iterations; the step size is too large for the forces, or they are not finite");
-}
-
-void ReferenceRigidBodyDynamics::constrainFreePositions(vector<Vec3>& oldPositions, vector<Vec3>& newPositions,
-                                                        double tolerance) {
-    if (!freeConstraints)
-        return;
-    freeConstraints->apply(oldPositions, newPositions, inverseMass, tolerance);
-    // OpenMM's CCMA stops after its iteration limit without saying so: check what it left.
-    for (size_t c = 0; c < freeConstraintDistances.size(); c++) {
-        const Vec3 d = newPositions[freeConstraintAtoms[c].first] - newPositions[freeConstraintAtoms[c].second];
-        const double length = std::sqrt(d.dot(d)), target = freeConstraintDistances[c];
-        if (!(std::fabs(length - target) <= ConstraintCheckSlack * tolerance * target))
-            throw OpenMMException("the constraint between free particles " + std::to_string(freeConstraintAtoms[c].first) +
-                                  " and " + std::to_string(freeConstraintAtoms[c].second) + " did not converge (" +
-                                  std::to_string(length) + " nm instead of " + std::to_string(target) +
-                                  " nm); the step size is too large for the velocities or forces");
-    }
-}
-
-void ReferenceRigidBodyDynamics::constrainFreeVelocities(vector<Vec3>& positions, vector<Vec3>& velocities,
-                                                         double tolerance) {
-    if (!freeConstraints)
-        return;
-    freeConstraints->applyToVelocities(positions, velocities, inverseMass, tolerance);
-    // The same criterion as CCMA's velocity step (2 mu |dv . r| / r^2 within the tolerance).
-    for (size_t c = 0; c < freeConstraintDistances.size(); c++) {
-        const int a = freeConstraintAtoms[c].first, b = freeConstraintAtoms[c].second;
-        const Vec3 r = positions[a] - positions[b];
-        const double reducedMass = 1.0 / (inverseMass[a] + inverseMass[b]);
-        const double error = std::fabs(reducedMass * (velocities[a] - velocities[b]).dot(r) / r.dot(r));
-        if (!(error <= ConstraintCheckSlack * tolerance))
-            throw OpenMMException("the velocity constraint between free particles " + std::to_string(a) + " and " +
-                                  std::to_string(b) + " did not converge");
-    }
-}
-
-void ReferenceRigidBodyDynamics::projectVelocities(vector<Vec3>& positions, vector<Vec3>& velocities, double tolerance) {
-    constrainFreeVelocities(positions, velocities, tolerance);
-    kickAndProjectBodies(coordinates(positions), coordinates(velocities), RigidBodyMath::Kick(), nullptr);
-}
-
-void ReferenceRigidBodyDynamics::kickAndProjectBodies(const double* positions, double* velocities,
-                                                      const RigidBodyMath::Kick& kick,
-                                                      const std::function<void(int, int)>& freeWork) {
-    forEachBodyRangeAndFreeParticle(
-        [&](int begin, int end) {
-            RigidBodyMath::kickAndProjectBodiesVelocities(views.data() + begin, end - begin, kick, positions,
-                                                          velocities);
-            return INT_MAX;
-        },
-        freeWork);
-}
-
-void ReferenceRigidBodyDynamics::projectNonRigidVelocities(vector<Vec3>& positions, vector<Vec3>& velocities,
-                                                           double tolerance) {
-    constrainFreeVelocities(positions, velocities, tolerance);
-    const double* x = coordinates(positions);
-    double* v = coordinates(velocities);
-    forEachBody([&](int b) {
-        RigidBodyMath::projectNonRigidBodyVelocities(view(b), x, v, RigidBodyMath::RigidVelocityTolerance);
-        return true;
-    });
-}
-
-void ReferenceRigidBodyDynamics::kickAndProject(ContextImpl& context, double stepSize, double tolerance) {
-    vector<Vec3>& x = positions(context);
-    vector<Vec3>& v = velocities(context);
-    const vector<Vec3>& f = forces(context);
-    const double halfStep = 0.5 * stepSize;
-    // One parallel region: free particles' kicks (they are massive), and each body's kick and
-    // projection in the same passes over its atoms. Massless particles take no kick.
-    const vector<int>& freeParticles = bodies.getFreeParticles();
-    kickAndProjectBodies(coordinates(x), coordinates(v), kickOf(&f, halfStep), [&](int begin, int end) {
-        for (int k = begin; k < end; k++) {
-            const int i = freeParticles[k];
-            v[i] += f[i] * (halfStep * inverseMass[i]);
-        }
-    });
-    // RATTLE's velocity step for the free constraints (it touches free particles only).
-    constrainFreeVelocities(x, v, tolerance);
-}
-
-double ReferenceRigidBodyDynamics::kineticEnergy(const vector<Vec3>& velocities) const {
-    double energy = 0;
-    for (size_t i = 0; i < velocities.size(); i++)
-        if (inverseMass[i] != 0)
-            energy += 0.5 * velocities[i].dot(velocities[i]) / inverseMass[i];
-    return energy;
-}
-
-void ReferenceRigidBodyDynamics::kineticEnergies(const vector<Vec3>& velocities, double& translational,
-                                                 double& rotational, double& free) const {
-    translational = rotational = free = 0;
-    for (int b = 0; b < bodies.getNumBodies(); b++) {
-        const vector<int>& atoms = bodies.getBodyParticles(b);
-        Vec3 momentum;
-        for (int i : atoms)   // body members are massive
-            momentum += velocities[i] / inverseMass[i];
-        const double mass = bodies.getBodyMass(b);
-        const Vec3 center = momentum / mass;
-        translational += 0.5 * mass * center.dot(center);
-        for (int i : atoms) {
-            const Vec3 relative = velocities[i] - center;
-            rotational += 0.5 * relative.dot(relative) / inverseMass[i];
-        }
-    }
-    for (int i : bodies.getFreeParticles())
-        free += 0.5 * velocities[i].dot(velocities[i]) / inverseMass[i];
-}
-
-vector<Vec3> ReferenceRigidBodyDynamics::velocitiesForTemperature(vector<Vec3>& positions, double temperature,
+vector<Vec3> ReferenceRigidBodyDynamics::velocitiesForTemperature(ContextImpl& context, double temperature,
                                                                   int randomSeed, double tolerance) {
-    // Maxwell-Boltzmann per particle, then the rigid-body projection (which keeps the
-    // distribution's form on the rigid degrees of freedom), then an exact rescale to the
-    // requested kinetic temperature with the rigid-body degrees of freedom.
-    vector<Vec3> velocities = HostRigidBodyRules::maxwellBoltzmannVelocities(inverseMass, temperature, randomSeed);
-    projectVelocities(positions, velocities, tolerance);
-    HostRigidBodyRules::scaleToTemperature(bodies, inverseMass, bodies.getNumDegreesOfFreedom(getBodyDegreesOfFreedom()),
-                                           temperature, velocities);
-    return velocities;
+    return ops->velocitiesForTemperature(positionsOf(context), temperature, randomSeed, tolerance);
 }
 
-void ReferenceRigidBodyDynamics::collideBodies(ContextImpl& context, double tolerance) {
-    // AndersenThermostat randomizes single particles (or groups held by constraints).
-    // Projecting a body of which only some atoms are fresh onto rigid motion does not keep
-    // the rigid-body Boltzmann distribution (bonded water settles ~10% cold), while
-    // projecting fresh Maxwell-Boltzmann velocities of all its atoms does.
-    vector<Vec3>& x = positions(context);
-    vector<Vec3>& v = velocities(context);
-    const double* positionData = coordinates(x);
-    const double temperature = context.getParameter(AndersenThermostat::Temperature());
-    std::normal_distribution<double> gaussian(0.0, 1.0);
-    for (int b = 0; b < bodies.getNumBodies(); b++) {
-        if (!(RigidBodyMath::nonRigidVelocityFraction(view(b), positionData, coordinates(v)) > RigidBodyMath::CollisionThreshold))
-            continue;  // still rigid: no collision
-        for (int i : bodies.getBodyParticles(b)) {
-            double sigma = std::sqrt(BOLTZ * temperature * inverseMass[i]);
-            double gx = gaussian(collisionRandom), gy = gaussian(collisionRandom), gz = gaussian(collisionRandom);
-            v[i] = Vec3(gx, gy, gz) * sigma;
-        }
-    }
-    projectNonRigidVelocities(x, v, tolerance);
+double ReferenceRigidBodyDynamics::kineticEnergy(ContextImpl& context) {
+    return ops->kineticEnergy(velocitiesOf(context));
 }
 
-void ReferenceRigidBodyDynamics::writeState(std::ostream& stream) const {
-    std::ostringstream text;
-    text << collisionRandom;
-    HostRigidBodyRules::writeKernelState(stream, text.str());
+void ReferenceRigidBodyDynamics::kineticEnergies(ContextImpl& context, double& translational, double& rotational,
+                                                 double& free) {
+    ops->kineticEnergies(velocitiesOf(context), translational, rotational, free);
 }
 
-void ReferenceRigidBodyDynamics::readState(std::istream& stream) {
-    std::istringstream text(HostRigidBodyRules::readKernelState(stream));
-    std::mt19937_64 generator;
-    text >> generator;
-    if (text.fail())
-        throw OpenMMException("the checkpoint's kernel data is malformed (its random state cannot be read)");
-    collisionRandom = generator;
-    randomIsSet = true;
+void ReferenceRigidBodyDynamics::createCheckpoint(std::ostream& stream) const {
+    ops->writeState(stream);
+}
+
+void ReferenceRigidBodyDynamics::loadCheckpoint(std::istream& stream) {
+    ops->readState(stream);
+}
+
+void ReferenceRigidBodyDynamics::discardRefusedCheckpoint(ContextImpl& context) {
+    // OpenMM's Reference and CPU platforms keep one process-wide random generator (the
+    // AndersenThermostat's, among others) whose state a checkpoint overwrites unchecked,
+    // garbage included. Initialising OpenMM's thermostat kernel reseeds it (with the
+    // System's thermostat seed if it has one), so it rebuilds a valid state.
+    AndersenThermostat seeded(0, 0);
+    const System& system = context.getSystem();
+    for (int f = 0; f < system.getNumForces(); f++)
+        if (const auto* thermostat = dynamic_cast<const AndersenThermostat*>(&system.getForce(f)))
+            seeded.setRandomNumberSeed(thermostat->getRandomNumberSeed());
+    Kernel reseed = context.getPlatform().createKernel(ApplyAndersenThermostatKernel::Name(), context);
+    reseed.getAs<ApplyAndersenThermostatKernel>().initialize(system, seeded);
 }

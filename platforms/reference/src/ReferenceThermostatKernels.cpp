@@ -1,8 +1,6 @@
 #include "ReferenceThermostatKernels.h"
 #include "HostRigidBodyRules.h"
-#include "openmm/OpenMMException.h"
 #include "openmm/reference/SimTKOpenMMRealType.h"
-#include <cmath>
 #include <sstream>
 
 using namespace MRattlePlugin;
@@ -10,30 +8,32 @@ using namespace OpenMM;
 using std::vector;
 
 template <class StepKernel>
-void ReferenceVelocityScalingStepKernel<StepKernel>::integratePositions(ContextImpl& context,
-                                                                       const Integrator& integrator) {
-    vector<Vec3>& x = ReferenceRigidBodyDynamics::positions(context);
-    vector<Vec3>& v = ReferenceRigidBodyDynamics::velocities(context);
-    const vector<Vec3>& f = ReferenceRigidBodyDynamics::forces(context);
-    const double h = integrator.getStepSize();
-    // The thermostat's first half step on a copy: the Context keeps v until the step is known to be good.
-    const double scale = halfStepScale(this->dynamics->kineticEnergy(v), integrator);
-    scaled.resize(v.size());
-    for (size_t i = 0; i < v.size(); i++)
-        scaled[i] = v[i] * scale;
-    this->dynamics->driftAndReset(x, scaled, h, integrator.getConstraintTolerance(), this->newPositions,
-                                  this->newVelocities, &f, 0.5 * h);
-    x.swap(this->newPositions);
-    // newVelocities keeps the unscaled velocities from before the step, for execute() to undo it.
-    v.swap(this->newVelocities);
-    this->placeVirtualSites(context);
+void ReferenceVelocityScalingStepKernel<StepKernel>::execute(ContextImpl& context, const Integrator& integrator,
+                                                             bool& forcesAreValid) {
+    ReferenceRigidBodyDynamics& dynamics = this->dynamics;
+    const double h = integrator.getStepSize(), tolerance = integrator.getConstraintTolerance();
+    // The thermostat's half step, then velocity Verlet (half kick, drift and reset, new
+    // forces, half kick and projection), then the thermostat's second half step.
+    dynamics.beginStep(context, integrator, forcesAreValid);
+    backUpState();
+    try {
+        halfStep(integrator);
+        dynamics.driftAndReset(0.5 * h, h, tolerance);
+        dynamics.computeForces(context, integrator, forcesAreValid);
+        dynamics.kick(0.5 * h);
+        dynamics.project(tolerance, false);
+        halfStep(integrator);
+        dynamics.endStep(h, forcesAreValid);
+    } catch (...) {
+        restoreState();  // the particles are put back by the phase that failed; the thermostat here
+        throw;
+    }
 }
 
 template <class StepKernel>
-void ReferenceVelocityScalingStepKernel<StepKernel>::finishStep(ContextImpl& context, const Integrator& integrator) {
-    Base::finishStep(context, integrator);  // velocity Verlet's closing half kick and projection
-    vector<Vec3>& v = ReferenceRigidBodyDynamics::velocities(context);
-    const double scale = halfStepScale(this->dynamics->kineticEnergy(v), integrator);
+void ReferenceVelocityScalingStepKernel<StepKernel>::halfStep(const Integrator& integrator) {
+    vector<Vec3>& v = this->dynamics.velocities();
+    const double scale = halfStepScale(this->dynamics.operations().kineticEnergy(v), integrator);
     for (Vec3& velocity : v)
         velocity *= scale;
 }
@@ -44,11 +44,9 @@ template class MRattlePlugin::ReferenceVelocityScalingStepKernel<IntegrateMRattl
 
 // ---- Nose-Hoover chain ---------------------------------------------------------------------
 
-void ReferenceIntegrateMRattleNoseHooverStepKernel::initialize(const System& system, const RigidBodyTopology& topology,
-                                                               const RigidBodyIntegrator& integrator) {
-    ReferenceVelocityScalingStepKernel::initialize(system, topology, integrator);
-    chain = RigidBodyThermostats::NoseHooverChain(
-        static_cast<const MRattleNoseHooverIntegrator&>(integrator).getChainLength());
+void ReferenceIntegrateMRattleNoseHooverStepKernel::initializeIntegrator(const System& system,
+                                                                         const MRattleNoseHooverIntegrator& integrator) {
+    chain = RigidBodyThermostats::NoseHooverChain(integrator.getChainLength());
 }
 
 double ReferenceIntegrateMRattleNoseHooverStepKernel::halfStepScale(double kineticEnergy,
@@ -79,10 +77,9 @@ void ReferenceIntegrateMRattleNoseHooverStepKernel::loadCheckpoint(ContextImpl& 
 
 // ---- CSVR ----------------------------------------------------------------------------------
 
-void ReferenceIntegrateMRattleBussiStepKernel::initialize(const System& system, const RigidBodyTopology& topology,
-                                                          const RigidBodyIntegrator& integrator) {
-    ReferenceVelocityScalingStepKernel::initialize(system, topology, integrator);
-    dynamics->seedRandom(static_cast<const MRattleBussiIntegrator&>(integrator).getRandomNumberSeed());
+void ReferenceIntegrateMRattleBussiStepKernel::initializeIntegrator(const System& system,
+                                                                    const MRattleBussiIntegrator& integrator) {
+    dynamics.operations().seedRandom(integrator.getRandomNumberSeed());
     work = 0;
 }
 
@@ -91,18 +88,17 @@ double ReferenceIntegrateMRattleBussiStepKernel::halfStepScale(double kineticEne
     const double scale = RigidBodyThermostats::csvrScale(kineticEnergy, degreesOfFreedom(),
                                                          BOLTZ * integrator.getTemperature(),
                                                          integrator.getCollisionFrequency(),
-                                                         0.5 * integrator.getStepSize(), dynamics->random());
+                                                         0.5 * integrator.getStepSize(), dynamics.operations().random());
     work += (scale * scale - 1) * kineticEnergy;
     return scale;
 }
 
 void ReferenceIntegrateMRattleBussiStepKernel::createCheckpoint(ContextImpl& context, std::ostream& stream) const {
-    ReferenceVelocityScalingStepKernel::createCheckpoint(context, stream);  // the random stream (on a device, OpenMM's part holds it)
+    ReferenceVelocityScalingStepKernel::createCheckpoint(context, stream);  // the random stream
     HostRigidBodyRules::writeKernelState(stream, RigidBodyThermostats::csvrWorkState(work));
 }
 
 void ReferenceIntegrateMRattleBussiStepKernel::loadCheckpoint(ContextImpl& context, std::istream& stream) {
     ReferenceVelocityScalingStepKernel::loadCheckpoint(context, stream);
-    const double value = RigidBodyThermostats::csvrWorkFromState(HostRigidBodyRules::readKernelState(stream));
-    work = value;
+    work = RigidBodyThermostats::csvrWorkFromState(HostRigidBodyRules::readKernelState(stream));
 }

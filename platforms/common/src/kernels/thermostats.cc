@@ -31,7 +31,16 @@ DEVICE mixed twiceKineticOfAtoms(int numAtoms, GLOBAL const mixed4* RESTRICT vel
     return sum;
 }
 
-DEVICE void scaleAllVelocities(int numAtoms, GLOBAL mixed4* RESTRICT velm, mixed factor) {
+/**
+ * Scale every velocity by the factor; a factor that is not finite (from a kinetic energy that
+ * is not) is a failure of the step, which the host then undoes, and scales nothing.
+ */
+DEVICE void scaleAllVelocities(int numAtoms, GLOBAL mixed4* RESTRICT velm, mixed factor, GLOBAL int* RESTRICT failure) {
+    if (!(factor*factor <= 1e30f)) {
+        if (LOCAL_ID == 0)
+            recordFailure(failure);
+        return;
+    }
     for (int index = LOCAL_ID; index < numAtoms; index += LOCAL_SIZE) {
         const mixed4 v = velm[index];
         velm[index] = make_mixed4(factor*v.x, factor*v.y, factor*v.z, v.w);
@@ -65,7 +74,7 @@ DEVICE void chainHalfUpdate(int j, mixed s, int chainLength, mixed twiceKinetic,
 KERNEL void noseHooverChainHalfStep(int numAtoms, GLOBAL mixed4* RESTRICT velm, int chainLength,
         GLOBAL mixed* RESTRICT chainPosition, GLOBAL mixed* RESTRICT chainVelocity, GLOBAL const mixed* RESTRICT weights,
         int numWeights, int numMTS, mixed dof, mixed kT, mixed frequency, mixed halfStep,
-        GLOBAL const int* RESTRICT failure) {
+        GLOBAL int* RESTRICT failure) {
     if (failure[0] != 0)
         return;
     LOCAL mixed sums[THERMOSTAT_THREADS];
@@ -93,7 +102,7 @@ KERNEL void noseHooverChainHalfStep(int numAtoms, GLOBAL mixed4* RESTRICT velm, 
         factor = scale;
     }
     SYNC_THREADS;
-    scaleAllVelocities(numAtoms, velm, factor);
+    scaleAllVelocities(numAtoms, velm, factor, failure);
 }
 
 /**
@@ -104,7 +113,7 @@ KERNEL void noseHooverChainHalfStep(int numAtoms, GLOBAL mixed4* RESTRICT velm, 
  */
 KERNEL void stochasticRescalingHalfStep(int numAtoms, GLOBAL mixed4* RESTRICT velm, GLOBAL const float4* RESTRICT random,
         unsigned int randomIndex, int dof, mixed kT, mixed c, GLOBAL mixed* RESTRICT work,
-        GLOBAL const int* RESTRICT failure) {
+        GLOBAL int* RESTRICT failure) {
     if (failure[0] != 0)
         return;
     LOCAL mixed sums[THERMOSTAT_THREADS];
@@ -132,5 +141,5 @@ KERNEL void stochasticRescalingHalfStep(int numAtoms, GLOBAL mixed4* RESTRICT ve
         factor = alpha;
     }
     SYNC_THREADS;
-    scaleAllVelocities(numAtoms, velm, factor);
+    scaleAllVelocities(numAtoms, velm, factor, failure);
 }
