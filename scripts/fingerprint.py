@@ -29,6 +29,8 @@ INTEGRATORS = {
     'MRattle': lambda: mrattle.MRattleIntegrator(0.002),
     'MRattleLangevin': lambda: _seeded(mrattle.MRattleLangevinIntegrator(300, 1.0, 0.002)),
     'RigidSplitting': lambda: mrattle.RigidSplittingIntegrator(0.002),
+    'MRattleNoseHoover': lambda: mrattle.MRattleNoseHooverIntegrator(300, 10.0, 0.002),
+    'MRattleBussi': lambda: _seeded(mrattle.MRattleBussiIntegrator(300, 10.0, 0.002)),
 }
 # One CPU thread: OpenMM's CPU forces summed on several threads differ from run to run.
 PROPERTIES = {'CPU': {'Threads': '1'}, 'OpenCL': {'Precision': 'double'}}

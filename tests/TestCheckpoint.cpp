@@ -15,7 +15,9 @@
  */
 #include "RigidSplittingIntegrator.h"
 #include "TestSupport.h"
+#include "MRattleBussiIntegrator.h"
 #include "MRattleLangevinIntegrator.h"
+#include "MRattleNoseHooverIntegrator.h"
 #include "openmm/serialization/XmlSerializer.h"
 #include <gtest/gtest.h>
 #include <algorithm>
@@ -169,6 +171,7 @@ void loadCheckpoint(Context& context, const string& checkpoint) {
 
 /** A Context on a cluster, at 300 K. */
 struct TestRun {
+    Config config;
     MixedCluster cluster;
     std::unique_ptr<RigidBodyIntegrator> integrator;
     std::unique_ptr<Context> context;
@@ -178,7 +181,7 @@ struct TestRun {
     }
     TestRun(const Config& config, std::unique_ptr<RigidBodyIntegrator> integratorToUse, int extras = NoExtras,
             const vector<vector<int> >& bodies = {})
-        : cluster(mixedCluster(extras)), integrator(std::move(integratorToUse)) {
+        : config(config), cluster(mixedCluster(extras)), integrator(std::move(integratorToUse)) {
         for (const auto& body : bodies)
             integrator->addRigidBody(body);
         context.reset(new Context(cluster.system, *integrator, platform(config.platform),
@@ -318,9 +321,10 @@ void expectRefusedUntilStateIsSet(TestRun& run, const string& badCheckpoint, con
 
     loadCheckpoint(*run.context, good);
     run.integrator->step(10);
-    // A Langevin integrator's noise restarts from its seed at reinitialize() (a State holds
-    // no random stream), so only a deterministic run continues as the good checkpoint's.
-    if (dynamic_cast<MRattleLangevinIntegrator*>(run.integrator.get()) == nullptr)
+    // An integrator's own state (a random stream, a thermostat's chain) restarts at
+    // reinitialize() (a State does not hold it), so only one without it continues as the
+    // good checkpoint's.
+    if (!run.config.traits().hasOwnState)
         expectSameState(afterRefusal, snapshot(*run.context));
 }
 
@@ -471,6 +475,16 @@ TEST_P(Checkpoint, SteppingWritesNoCheckpointEvenWithJunkLeftByARefusedOne) {
     }
     else if (GetParam().integrator == "RigidSplitting") {
         auto* integrator = new CountingCheckpoints<RigidSplittingIntegrator>(0.002);
+        checkpointsWritten = &integrator->checkpointsWritten;
+        counting.reset(integrator);
+    }
+    else if (GetParam().integrator == "MRattleNoseHoover") {
+        auto* integrator = new CountingCheckpoints<MRattleNoseHooverIntegrator>(300.0, 10.0, 0.002);
+        checkpointsWritten = &integrator->checkpointsWritten;
+        counting.reset(integrator);
+    }
+    else if (GetParam().integrator == "MRattleBussi") {
+        auto* integrator = new CountingCheckpoints<MRattleBussiIntegrator>(300.0, 10.0, 0.002);
         checkpointsWritten = &integrator->checkpointsWritten;
         counting.reset(integrator);
     }

@@ -78,6 +78,9 @@ TEST_P(Reliability, NonFiniteForcesAreRefusedAndTheStateKept) {
 }
 
 TEST_P(Reliability, AStepTooLargeForTheRotationIsRefused) {
+    if (GetParam().traits().rescalesVelocities)
+        GTEST_SKIP() << GetParam().integrator << " scales the velocities before the drift: its thermostat slows a "
+                        "spin this far from its temperature first (the reset's refusal is checked without it)";
     // A benzene spinning at 20 rad/ps with a 0.1 ps step turns by 2 rad in a step.
     Molecule b = benzene();
     System system;

@@ -19,17 +19,6 @@ using std::vector;
 
 namespace {
 
-string toXml(const Integrator& integrator) {
-    std::stringstream stream;
-    XmlSerializer::serialize<Integrator>(&integrator, "Integrator", stream);
-    return stream.str();
-}
-
-std::unique_ptr<Integrator> fromXml(const string& xml) {
-    std::stringstream stream(xml);
-    return std::unique_ptr<Integrator>(XmlSerializer::deserialize<Integrator>(stream));
-}
-
 bool sameBits(double a, double b) {
     return std::memcmp(&a, &b, sizeof(double)) == 0;
 }

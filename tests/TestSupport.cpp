@@ -1,10 +1,13 @@
 #include "TestSupport.h"
 #include "MRattleBuildInfo.h"
 #include "MRattlePlatforms.h"
+#include "MRattleBussiIntegrator.h"
 #include "MRattleLangevinIntegrator.h"
+#include "MRattleNoseHooverIntegrator.h"
 #include "RigidSplittingIntegrator.h"
 #include <gtest/gtest.h>
 #include "openmm/OpenMMException.h"
+#include "openmm/serialization/XmlSerializer.h"
 #include <cmath>
 #include <cstdlib>
 #include <mutex>
@@ -107,15 +110,27 @@ std::string unavailable(const std::string& name) {
 const std::vector<IntegratorTraits>& integrators() {
     using namespace MRattlePlugin;
     static const std::vector<IntegratorTraits> list = {
-        // name, conservesEnergy, stochastic, runsOnDevicePlatforms, make
-        {"MRattle", true, false, true, [](double h) { return new MRattleIntegrator(h); }},
-        {"MRattleLangevin", false, true, true,
+        // name, conservesEnergy, stochastic, runsOnDevicePlatforms, hasOwnState, rescalesVelocities, make, removeNoise
+        {"MRattle", true, false, true, false, false, [](double h) { return new MRattleIntegrator(h); }},
+        {"MRattleLangevin", false, true, true, true, false,
          [](double h) {
              auto* langevin = new MRattleLangevinIntegrator(300.0, 1.0, h);
              langevin->setRandomNumberSeed(2024);
              return langevin;
+         },
+         [](RigidBodyIntegrator& integrator) { dynamic_cast<MRattleLangevinIntegrator&>(integrator).setFriction(0); }},
+        {"RigidSplitting", true, false, false, false, false, [](double h) { return new RigidSplittingIntegrator(h); }},
+        {"MRattleNoseHoover", false, false, true, true, true,  // 300 K, 10/ps, chain of 3, MTS 3, Yoshida-Suzuki 7
+         [](double h) { return new MRattleNoseHooverIntegrator(300.0, 10.0, h); }},
+        {"MRattleBussi", false, true, true, true, true,
+         [](double h) {
+             auto* bussi = new MRattleBussiIntegrator(300.0, 10.0, h);
+             bussi->setRandomNumberSeed(2024);
+             return bussi;
+         },
+         [](RigidBodyIntegrator& integrator) {
+             dynamic_cast<MRattleBussiIntegrator&>(integrator).setCollisionFrequency(0);
          }},
-        {"RigidSplitting", true, false, false, [](double h) { return new RigidSplittingIntegrator(h); }},
     };
     return list;
 }
@@ -429,6 +444,27 @@ double linearSlope(const vector<double>& values) {
         variance += (i - meanIndex) * (i - meanIndex);
     }
     return covariance / variance;
+}
+
+std::string toXml(const Integrator& integrator) {
+    std::stringstream stream;
+    XmlSerializer::serialize<Integrator>(&integrator, "Integrator", stream);
+    return stream.str();
+}
+
+std::unique_ptr<Integrator> fromXml(const std::string& xml) {
+    std::stringstream stream(xml);
+    return std::unique_ptr<Integrator>(XmlSerializer::deserialize<Integrator>(stream));
+}
+
+std::string messageOfXmlWith(const std::string& xml, const std::string& original, const std::string& replacement) {
+    std::string text = xml;
+    const size_t at = text.find(original);
+    EXPECT_NE(std::string::npos, at) << "the XML has no " << original;
+    if (at == std::string::npos)
+        return "";
+    text.replace(at, original.size(), replacement);
+    return messageOf([&] { fromXml(text); });
 }
 
 } // namespace MRattleTest

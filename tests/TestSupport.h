@@ -31,8 +31,17 @@ struct IntegratorTraits {
     bool stochastic;
     /** Runs on the device platforms (OpenCL, CUDA) as well as Reference and CPU. */
     bool runsOnDevicePlatforms;
+    /**
+     * Keeps state of its own that a State does not hold (a random stream, a thermostat's
+     * variables): after Context::setState() it continues otherwise than from a checkpoint.
+     */
+    bool hasOwnState;
+    /** Its step first scales every velocity by a thermostat's factor: a motion a test sets up is changed before the drift. */
+    bool rescalesVelocities;
     /** One with this step size (a thermostat: 300 K, 1/ps, a fixed random seed: two Contexts draw the same noise). */
     std::function<MRattlePlugin::RigidBodyIntegrator*(double stepSize)> make;
+    /** A stochastic one's noise turned off (device and host draw different numbers: what is left must agree); else none. */
+    std::function<void(MRattlePlugin::RigidBodyIntegrator&)> removeNoise;
 };
 /** Every rigid-body integrator of the plugin. */
 const std::vector<IntegratorTraits>& integrators();
@@ -175,6 +184,13 @@ OpenMM::Vec3 rotate(const std::vector<OpenMM::Vec3>& rotation, const OpenMM::Vec
  * Without constraints it is plain velocity Verlet. The caller owns the result.
  */
 OpenMM::CustomIntegrator* rattleVerletIntegrator(double stepSize, double constraintTolerance);
+
+/** An integrator's XML (OpenMM's XmlSerializer, as "Integrator"). */
+std::string toXml(const OpenMM::Integrator& integrator);
+/** The integrator that XML describes (XmlSerializer; throws what it throws). */
+std::unique_ptr<OpenMM::Integrator> fromXml(const std::string& xml);
+/** The message of reading an integrator's XML with the first `original` replaced by `replacement` (and a test failure if it is not there, or if reading does not throw). */
+std::string messageOfXmlWith(const std::string& xml, const std::string& original, const std::string& replacement);
 
 /** Particle masses of a System. */
 std::vector<double> masses(const OpenMM::System& system);

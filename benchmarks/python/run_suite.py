@@ -156,12 +156,17 @@ def main():
         from suite import equipartition
         md += equipartition.run(q, os.path.join(results_dir, "equipartition"), log)
 
+    if "thermostats" in parts:
+        log("thermostats: Nose-Hoover chain and CSVR on rigid TIP3P water (canonical sampling, drift, diffusion)")
+        from suite import thermostats
+        md += thermostats.run(q, os.path.join(results_dir, "thermostats"), log)
+
     path = os.path.join(out, "results.md")
     report.write(path, md, parts >= set(ALL_PARTS), args.only, (time.time() - started) / 60)
     log("wrote %s" % path)
 
 
-ALL_PARTS = ("accuracy", "cost", "sampling", "drift", "gains", "langevin", "equipartition")
+ALL_PARTS = ("accuracy", "cost", "sampling", "drift", "gains", "langevin", "equipartition", "thermostats")
 
 
 def write_csv(path, rows):

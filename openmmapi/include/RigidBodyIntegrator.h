@@ -112,6 +112,14 @@ protected:
     virtual std::string getStepKernelName() const = 0;
     /** One step by the kernel, through its own interface (whose execute() takes this integrator's class). */
     virtual void executeStep(OpenMM::Kernel& kernel, OpenMM::ContextImpl& context, bool& forcesAreValid) = 0;
+    /** The step kernel of the bound Context, for a subclass's own queries (throws if not bound). */
+    OpenMM::Kernel& getBoundKernel();
+    /**
+     * A setting's check: throw an OpenMMException "<integrator>: the <what> must be a finite
+     * number >= 0 <unit>, got <value>" (> 0 if zero is not allowed) unless it is one.
+     */
+    static void requireNonNegativeSetting(const char* integrator, const char* what, const char* unit, double value,
+                                          bool zeroAllowed = true);
 
     void initialize(OpenMM::ContextImpl& context) override;
     void cleanup() override;

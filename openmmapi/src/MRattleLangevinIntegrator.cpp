@@ -19,16 +19,12 @@ MRattleLangevinIntegrator::MRattleLangevinIntegrator(double temperature, double 
 }
 
 void MRattleLangevinIntegrator::setTemperature(double value) {
-    if (!(value >= 0) || !std::isfinite(value))
-        throw OpenMMException("MRattleLangevinIntegrator: the temperature must be a finite number >= 0 K, got " +
-                              std::to_string(value));
+    requireNonNegativeSetting("MRattleLangevinIntegrator", "temperature", "K", value);
     temperature = value;
 }
 
 void MRattleLangevinIntegrator::setFriction(double coeff) {
-    if (!(coeff >= 0) || !std::isfinite(coeff))
-        throw OpenMMException("MRattleLangevinIntegrator: the friction must be a finite number >= 0 /ps, got " +
-                              std::to_string(coeff));
+    requireNonNegativeSetting("MRattleLangevinIntegrator", "friction", "/ps", coeff);
     friction = coeff;
 }
 

@@ -151,6 +151,18 @@ double RigidBodyIntegrator::computeFreeTemperature() {
     return temperatureOf(computeFreeKineticEnergy(), getFreeDegreesOfFreedom());
 }
 
+Kernel& RigidBodyIntegrator::getBoundKernel() {
+    requireContext();
+    return kernel;
+}
+
+void RigidBodyIntegrator::requireNonNegativeSetting(const char* integrator, const char* what, const char* unit,
+                                                    double value, bool zeroAllowed) {
+    if (!std::isfinite(value) || value < 0 || (value == 0 && !zeroAllowed))
+        throw OpenMMException(std::string(integrator) + ": the " + what + " must be a finite number " +
+                              (zeroAllowed ? ">= 0 " : "> 0 ") + unit + ", got " + std::to_string(value));
+}
+
 void RigidBodyIntegrator::initialize(ContextImpl& contextRef) {
     if (owner != nullptr && &contextRef.getOwner() != owner)
         throw OpenMMException("This Integrator is already bound to a context");

@@ -50,7 +50,8 @@ def _hasPlatform(name):
 
 
 # The SWIG module first: it loads libMRattlePlugin.so, which the kernel plugin needs.
-from .integrators import RigidBodyIntegrator, MRattleIntegrator, MRattleLangevinIntegrator, RigidSplittingIntegrator
+from .integrators import (RigidBodyIntegrator, MRattleIntegrator, MRattleLangevinIntegrator, RigidSplittingIntegrator,
+                          MRattleNoseHooverIntegrator, MRattleBussiIntegrator)
 
 def _loadKernelPlugins():
     """{platform: kernel plugin path} for the build's platforms (_plugin_location.PLATFORMS) that OpenMM has."""
@@ -86,6 +87,7 @@ _installXmlSerializerHooks()
 _installMinimizerHook()
 
 
-__all__ = ['RigidBodyIntegrator', 'MRattleIntegrator', 'MRattleLangevinIntegrator', 'RigidSplittingIntegrator', 'StateDataReporter', 'degreesOfFreedom',
+__all__ = ['RigidBodyIntegrator', 'MRattleIntegrator', 'MRattleLangevinIntegrator', 'RigidSplittingIntegrator',
+           'MRattleNoseHooverIntegrator', 'MRattleBussiIntegrator', 'StateDataReporter', 'degreesOfFreedom',
            'kineticTemperature', 'removeIntraBodyInteractions', 'rigidBodies', 'declareRigidBodies', 'asPluginIntegrator', 'minimizeEnergy', 'RigidBodyMinimizer', 'models', 'baselines', 'PLUGIN_PATH',
            'PLUGIN_PATHS', 'PLATFORMS', 'DEVICE_PLATFORMS']

@@ -55,9 +55,10 @@ else:
 
 class StateDataReporter(_TemperatureReporter):
     """openmm.app.StateDataReporter reporting the rigid-body temperature, with columns for
-    the rigid bodies' translational and rotational temperatures.
+    the rigid bodies' translational and rotational temperatures and for a thermostat's
+    heat-bath energy.
 
-    On OpenMM 8 and later this is OpenMM's reporter with only the two columns added: OpenMM's
+    On OpenMM 8 and later this is OpenMM's reporter with only the columns added: OpenMM's
     own reports the rigid-body temperature (it asks the integrator's
     computeSystemTemperature()). On OpenMM 7.7, whose reporter counts 3 degrees of freedom
     per particle minus constraints (a rigid benzene has 6, not 36), it also takes the count
@@ -68,24 +69,47 @@ class StateDataReporter(_TemperatureReporter):
         write the bodies' translational temperature (RigidBodyIntegrator.computeTranslationalTemperature())
     rotationalTemperature : bool=False
         write the bodies' rotational temperature (RigidBodyIntegrator.computeRotationalTemperature())
+    heatBathEnergy : bool=False
+        write the thermostat's heat-bath energy (computeHeatBathEnergy() of MRattleNoseHooverIntegrator
+        or MRattleBussiIntegrator, or of OpenMM's NoseHooverIntegrator)
+    conservedEnergy : bool=False
+        write kinetic + potential + heat-bath energy, the quantity those thermostats conserve
 
-    The two columns follow the Temperature column (or where it would be). They need a
-    RigidBodyIntegrator; with MRattleLangevinIntegrator they use its half-step velocities, as
-    its kinetic energy does.
+    The new columns follow the Temperature column (or where it would be). The temperature
+    columns need a RigidBodyIntegrator; with MRattleLangevinIntegrator they use its half-step
+    velocities, as its kinetic energy does. The energy columns need an integrator with
+    computeHeatBathEnergy().
     """
 
     def __init__(self, file, reportInterval, *args, translationalTemperature=False, rotationalTemperature=False,
-                 **kwargs):
+                 heatBathEnergy=False, conservedEnergy=False, **kwargs):
         super().__init__(file, reportInterval, *args, **kwargs)
-        self._bodyColumns = [(name, method) for flag, name, method in (
-            (translationalTemperature, 'Translational Temperature (K)', 'computeTranslationalTemperature'),
-            (rotationalTemperature, 'Rotational Temperature (K)', 'computeRotationalTemperature')) if flag]
+        kelvin, energy = unit.kelvin, unit.kilojoules_per_mole
+        bath = lambda simulation: simulation.integrator.computeHeatBathEnergy()
+        self._bodyColumns = [(name, needs, value) for flag, name, needs, value in (
+            (translationalTemperature, 'Translational Temperature (K)', 'computeTranslationalTemperature',
+             lambda simulation, state: simulation.integrator.computeTranslationalTemperature().value_in_unit(kelvin)),
+            (rotationalTemperature, 'Rotational Temperature (K)', 'computeRotationalTemperature',
+             lambda simulation, state: simulation.integrator.computeRotationalTemperature().value_in_unit(kelvin)),
+            (heatBathEnergy, 'Heat Bath Energy (kJ/mole)', 'computeHeatBathEnergy',
+             lambda simulation, state: bath(simulation).value_in_unit(energy)),
+            (conservedEnergy, 'Conserved Energy (kJ/mole)', 'computeHeatBathEnergy',
+             lambda simulation, state: (state.getKineticEnergy() + state.getPotentialEnergy() +
+                                        bath(simulation)).value_in_unit(energy))) if flag]
+        if conservedEnergy:
+            self._needEnergy = True
 
     def report(self, simulation, state):
-        if self._bodyColumns and not isinstance(simulation.integrator, RigidBodyIntegrator):
+        needs = {needed for _, needed, _ in self._bodyColumns}
+        if needs & {'computeTranslationalTemperature', 'computeRotationalTemperature'} and \
+                not isinstance(simulation.integrator, RigidBodyIntegrator):
             raise ValueError('StateDataReporter: the translationalTemperature and rotationalTemperature columns need a '
                              'RigidBodyIntegrator (such as mrattle.MRattleIntegrator); the Simulation has a %s'
                              % type(simulation.integrator).__name__)
+        if 'computeHeatBathEnergy' in needs and not hasattr(simulation.integrator, 'computeHeatBathEnergy'):
+            raise ValueError('StateDataReporter: the heatBathEnergy and conservedEnergy columns need an integrator with '
+                             'computeHeatBathEnergy() (mrattle.MRattleNoseHooverIntegrator, mrattle.MRattleBussiIntegrator); '
+                             'the Simulation has a %s' % type(simulation.integrator).__name__)
         super().report(simulation, state)
 
     # OpenMM's StateDataReporter has no public way to add columns: the two below extend the
@@ -103,12 +127,12 @@ class StateDataReporter(_TemperatureReporter):
         headers = super()._constructHeaders()
         self._bodyIndex = self._bodyColumnIndex(headers)
         index = self._bodyIndex
-        return headers[:index] + [name for name, _ in self._bodyColumns] + headers[index:]
+        return headers[:index] + [name for name, _, _ in self._bodyColumns] + headers[index:]
 
     def _constructReportValues(self, simulation, state):
         values = super()._constructReportValues(simulation, state)
         if not self._bodyColumns:
             return values
         index = self._bodyIndex
-        extra = [getattr(simulation.integrator, method)().value_in_unit(unit.kelvin) for _, method in self._bodyColumns]
+        extra = [value(simulation, state) for _, _, value in self._bodyColumns]
         return values[:index] + extra + values[index:]

@@ -3,8 +3,10 @@
     python3 -m mrattle.testInstallation
 
 lists the platforms that have the plugin's kernels, then runs the 27-benzene cluster for
-20 steps of MRattleIntegrator on each and compares the positions with Reference's. Exits
-non-zero if a platform fails or disagrees.
+20 steps of MRattleIntegrator and of MRattleNoseHooverIntegrator on each and compares the
+positions with Reference's, and 20 steps of MRattleBussiIntegrator (its random numbers are
+each platform's own: it must run and stay finite). Exits non-zero if a platform fails or
+disagrees.
 """
 import sys
 
@@ -20,8 +22,18 @@ AGREEMENT = {'double': 1e-8, 'mixed': 1e-6, 'single': 1e-4}
 STEPS = 20
 
 
-def runOn(platformName, model):
-    integrator = mrattle.MRattleIntegrator(2*unit.femtoseconds)
+#: The integrators run: name, how to make it, whether its run is deterministic (compared with Reference's).
+INTEGRATORS = (
+    ('MRattleIntegrator', lambda: mrattle.MRattleIntegrator(2*unit.femtoseconds), True),
+    ('MRattleNoseHooverIntegrator',
+     lambda: mrattle.MRattleNoseHooverIntegrator(300*unit.kelvin, 10/unit.picosecond, 2*unit.femtoseconds), True),
+    ('MRattleBussiIntegrator',
+     lambda: mrattle.MRattleBussiIntegrator(300*unit.kelvin, 10/unit.picosecond, 2*unit.femtoseconds), False),
+)
+
+
+def runOn(platformName, model, makeIntegrator):
+    integrator = makeIntegrator()
     context = openmm.Context(model.system, integrator, openmm.Platform.getPlatformByName(platformName))
     context.setPositions(model.positions)
     context.setVelocitiesToTemperature(300*unit.kelvin, 1)
@@ -33,23 +45,30 @@ def main():
     print('OpenMM %s, M-RATTLE plugin from %s' % (openmm.Platform.getOpenMMVersion(), mrattle.__file__))
     print('Platforms with the plugin\'s kernels: %s' % ', '.join(mrattle.PLATFORMS))
     model = mrattle.models.benzeneCluster()
-    reference = runOn('Reference', model)
     failures = 0
-    for name in mrattle.PLATFORMS:
-        try:
-            positions = runOn(name, model)
-        except Exception as error:  # a platform present but unusable here (no device, ...)
-            print('  %-10s failed: %s' % (name, error))
-            failures += 1
-            continue
-        difference = float(np.abs(positions - reference).max())
-        precision = openmm.Platform.getPlatformByName(name).getPropertyDefaultValue('Precision') \
-            if name in mrattle.DEVICE_PLATFORMS else 'double'
-        limit = AGREEMENT[precision]
-        verdict = 'agrees' if difference <= limit else 'DISAGREES'
-        failures += (difference > limit)
-        print('  %-10s %s with Reference: %.2e nm after %d steps (%s precision, limit %.0e)'
-              % (name, verdict, difference, STEPS, precision, limit))
+    for integratorName, makeIntegrator, deterministic in INTEGRATORS:
+        print('%s:' % integratorName)
+        reference = runOn('Reference', model, makeIntegrator)
+        for name in mrattle.PLATFORMS:
+            try:
+                positions = runOn(name, model, makeIntegrator)
+            except Exception as error:  # a platform present but unusable here (no device, ...)
+                print('  %-10s failed: %s' % (name, error))
+                failures += 1
+                continue
+            if not deterministic:
+                finite = bool(np.all(np.isfinite(positions)))
+                failures += not finite
+                print('  %-10s %s after %d steps' % (name, 'runs' if finite else 'FAILS: positions not finite', STEPS))
+                continue
+            difference = float(np.abs(positions - reference).max())
+            precision = openmm.Platform.getPlatformByName(name).getPropertyDefaultValue('Precision') \
+                if name in mrattle.DEVICE_PLATFORMS else 'double'
+            limit = AGREEMENT[precision]
+            verdict = 'agrees' if difference <= limit else 'DISAGREES'
+            failures += (difference > limit)
+            print('  %-10s %s with Reference: %.2e nm after %d steps (%s precision, limit %.0e)'
+                  % (name, verdict, difference, STEPS, precision, limit))
     return 1 if failures else 0
 
 

@@ -241,6 +241,69 @@ MRATTLE_INTEGRATOR(RigidSplittingIntegrator)
 %}
 MRATTLE_INTEGRATOR(MRattleLangevinIntegrator)
 
+/*
+ * The thermostats (Nose-Hoover chain, CSVR): temperature, collision frequency and step size
+ * with units, as OpenMM's NoseHooverIntegrator; the heat bath's energy in kJ/mol.
+ */
+%typemap(doctype) double collisionFrequency "float or Quantity (1/time)"
+%define MRATTLE_THERMOSTAT_UNITS(CLASS)
+%feature("pythonprepend") MRattlePlugin::CLASS::setTemperature %{
+    if unit.is_quantity(temperature):
+        temperature = temperature.value_in_unit(unit.kelvin)
+%}
+%feature("pythonprepend") MRattlePlugin::CLASS::setCollisionFrequency %{
+    if unit.is_quantity(frequency):
+        frequency = frequency.value_in_unit(unit.picosecond**-1)
+%}
+%feature("pythonappend") MRattlePlugin::CLASS::getTemperature %{
+    val = val*unit.kelvin
+%}
+%feature("pythonappend") MRattlePlugin::CLASS::getCollisionFrequency %{
+    val = val/unit.picosecond
+%}
+%feature("pythonappend") MRattlePlugin::CLASS::computeHeatBathEnergy %{
+    val = val*unit.kilojoules_per_mole
+%}
+%enddef
+MRATTLE_THERMOSTAT_UNITS(MRattleNoseHooverIntegrator)
+/*
+ * Per signature, so that these win over MRATTLE_INTEGRATOR's: SWIG's Python constructor (one,
+ * with the defaults) takes its prepend from the three-argument form.
+ */
+%define MRATTLE_NOSE_HOOVER_CONSTRUCTOR(SIGNATURE)
+%feature("pythonprepend") MRattlePlugin::MRattleNoseHooverIntegrator::MRattleNoseHooverIntegrator SIGNATURE %{
+    if unit.is_quantity(temperature):
+        temperature = temperature.value_in_unit(unit.kelvin)
+    if unit.is_quantity(collisionFrequency):
+        collisionFrequency = collisionFrequency.value_in_unit(unit.picosecond**-1)
+    if unit.is_quantity(stepSize):
+        stepSize = stepSize.value_in_unit(unit.picosecond)
+%}
+%enddef
+MRATTLE_NOSE_HOOVER_CONSTRUCTOR((double temperature, double collisionFrequency, double stepSize))
+MRATTLE_NOSE_HOOVER_CONSTRUCTOR((double temperature, double collisionFrequency, double stepSize, int chainLength))
+MRATTLE_NOSE_HOOVER_CONSTRUCTOR((double temperature, double collisionFrequency, double stepSize, int chainLength, int numMTS))
+MRATTLE_NOSE_HOOVER_CONSTRUCTOR((double temperature, double collisionFrequency, double stepSize, int chainLength, int numMTS, int numYoshidaSuzuki))
+MRATTLE_INTEGRATOR(MRattleNoseHooverIntegrator)
+MRATTLE_THERMOSTAT_UNITS(MRattleBussiIntegrator)
+%feature("pythonprepend") MRattlePlugin::MRattleBussiIntegrator::MRattleBussiIntegrator(
+    double temperature, double collisionFrequency, double stepSize) %{
+    if unit.is_quantity(temperature):
+        temperature = temperature.value_in_unit(unit.kelvin)
+    if unit.is_quantity(collisionFrequency):
+        collisionFrequency = collisionFrequency.value_in_unit(unit.picosecond**-1)
+    if unit.is_quantity(stepSize):
+        stepSize = stepSize.value_in_unit(unit.picosecond)
+%}
+%feature("pythonprepend") MRattlePlugin::MRattleBussiIntegrator::setTimeConstant %{
+    if unit.is_quantity(tau):
+        tau = tau.value_in_unit(unit.picosecond)
+%}
+%feature("pythonappend") MRattlePlugin::MRattleBussiIntegrator::getTimeConstant %{
+    val = val*unit.picosecond
+%}
+MRATTLE_INTEGRATOR(MRattleBussiIntegrator)
+
 /* The plugin's XML check (the rule lives in C++): the package runs it before OpenMM's reader. */
 %{
 #include "MRattleXml.h"

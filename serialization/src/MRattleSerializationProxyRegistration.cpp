@@ -1,5 +1,7 @@
 #include "MRattleIntegrator.h"
+#include "MRattleBussiIntegratorProxy.h"
 #include "MRattleLangevinIntegratorProxy.h"
+#include "MRattleNoseHooverIntegratorProxy.h"
 #include "RigidBodyIntegratorProxy.h"
 #include "RigidSplittingIntegrator.h"
 #include "openmm/serialization/SerializationProxy.h"
@@ -30,4 +32,6 @@ extern "C" OPENMM_EXPORT_MRATTLE void registerMRattleSerializationProxies() {
     MRATTLE_REGISTER_PROXY(MRattleIntegrator);
     MRATTLE_REGISTER_PROXY(RigidSplittingIntegrator);
     MRATTLE_REGISTER_PROXY(MRattleLangevinIntegrator);
+    MRATTLE_REGISTER_PROXY(MRattleNoseHooverIntegrator);
+    MRATTLE_REGISTER_PROXY(MRattleBussiIntegrator);
 }

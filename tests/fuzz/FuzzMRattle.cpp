@@ -25,7 +25,10 @@
  * [--first K] [--verbose 1] (replay cases from K, printing each API call) [--selftest 1] (the first case of each category then crashes on purpose: the harness
  * must count it and fail).
  */
+#include "MRattleBussiIntegrator.h"
 #include "MRattleLangevinIntegrator.h"
+#include "MRattleNoseHooverIntegrator.h"
+#include "internal/RigidBodyThermostats.h"
 #include "MRattleXml.h"
 #include "RigidSplittingIntegrator.h"
 #include "mrattle/RigidBodyMath.h"
@@ -196,17 +199,27 @@ int bodiesCase(std::mt19937& random) {
 
 // ---- xml ------------------------------------------------------------------------------------
 
-string baseXml() {
-    MRattleIntegrator integrator(0.002);
-    integrator.addRigidBody({0, 1, 2});
-    integrator.addRigidBody({5, 7});
+/** A document of MRattleIntegrator or, with settings of its own to damage, MRattleNoseHooverIntegrator. */
+string baseXml(bool thermostat) {
+    std::unique_ptr<RigidBodyIntegrator> integrator(thermostat ? (RigidBodyIntegrator*) new MRattleNoseHooverIntegrator(300, 10, 0.002, 4, 2, 5)
+                                                               : (RigidBodyIntegrator*) new MRattleIntegrator(0.002));
+    integrator->addRigidBody({0, 1, 2});
+    integrator->addRigidBody({5, 7});
     std::stringstream stream;
-    XmlSerializer::serialize<Integrator>(&integrator, "Integrator", stream);
+    XmlSerializer::serialize<Integrator>(integrator.get(), "Integrator", stream);
     return stream.str();
 }
 
+/** Whether a deserialized Nose-Hoover integrator's own settings are ones its constructor accepts. */
+bool validChainSettings(const MRattleNoseHooverIntegrator& chain) {
+    return std::isfinite(chain.getTemperature()) && chain.getTemperature() > 0 &&
+           std::isfinite(chain.getCollisionFrequency()) && chain.getCollisionFrequency() >= 0 &&
+           chain.getChainLength() >= 1 && chain.getNumMultiTimeSteps() >= 1 &&
+           RigidBodyThermostats::isSupportedYoshidaSuzukiOrder(chain.getNumYoshidaSuzukiTimeSteps());
+}
+
 int xmlCase(std::mt19937& random) {
-    string xml = baseXml();
+    string xml = baseXml(std::uniform_int_distribution<int>(0, 1)(random) == 1);
     const char* tokens[] = {"0", "-1", "nan", "1e999", "0x10", "", "\"", "<", ">", "/>", "<Body size=\"1\">", "2.5", " a=\"1\""};
     std::uniform_int_distribution<int> ops(1, 3), kind(0, 5), byte(0, 255), token(0, 12);
     int n = ops(random);
@@ -232,6 +245,9 @@ int xmlCase(std::mt19937& random) {
         const double h = rigid->getStepSize(), tolerance = rigid->getConstraintTolerance();
         if (!std::isfinite(h) || h == 0 || !std::isfinite(tolerance) || !(tolerance > 0))
             return (int) SilentAcceptance;
+        if (auto* chain = dynamic_cast<MRattleNoseHooverIntegrator*>(rigid))
+            if (!validChainSettings(*chain))
+                return (int) SilentAcceptance;
         for (int b = 0; b < rigid->getNumRigidBodies(); b++) {
             std::set<int> seen;
             for (int i : rigid->getRigidBodyParticles(b))
@@ -246,10 +262,14 @@ int xmlCase(std::mt19937& random) {
 
 // ---- checkpoints ----------------------------------------------------------------------------
 
+/** One of the rigid-body integrators, drawn (every kernel's checkpoint state is fuzzed). */
+std::unique_ptr<RigidBodyIntegrator> anyIntegrator(std::mt19937& random, double stepSize);
+
 int checkpointCase(std::mt19937& random) {
     FuzzSystem f;
     f.system.addForce(new AndersenThermostat(300, 10.0));
-    MRattleIntegrator integrator(0.001);
+    std::unique_ptr<RigidBodyIntegrator> drawn = anyIntegrator(random, 0.001);
+    RigidBodyIntegrator& integrator = *drawn;
     Context context(f.system, integrator, platform("Reference"));
     context.setPositions(f.positions);
     context.setVelocitiesToTemperature(300, 2);
@@ -387,9 +407,11 @@ int apiCase(std::mt19937& random) {
 // ---- issue 22: end-of-step forces, free constraints, shapes, XML depth ----------------------
 
 std::unique_ptr<RigidBodyIntegrator> anyIntegrator(std::mt19937& random, double stepSize) {
-    switch (std::uniform_int_distribution<int>(0, 2)(random)) {
+    switch (std::uniform_int_distribution<int>(0, 4)(random)) {
     case 0: return std::unique_ptr<RigidBodyIntegrator>(new MRattleIntegrator(stepSize));
     case 1: return std::unique_ptr<RigidBodyIntegrator>(new RigidSplittingIntegrator(stepSize));
+    case 2: return std::unique_ptr<RigidBodyIntegrator>(new MRattleNoseHooverIntegrator(300, 10, stepSize));
+    case 3: return std::unique_ptr<RigidBodyIntegrator>(new MRattleBussiIntegrator(300, 10, stepSize));
     default: return std::unique_ptr<RigidBodyIntegrator>(new MRattleLangevinIntegrator(300, 1, stepSize));
     }
 }

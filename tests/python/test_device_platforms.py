@@ -157,3 +157,26 @@ def test_langevin_temperature_past_reorderings(devicePlatform):
         means.append(np.mean(temperatures))
     mean, error = np.mean(means), np.std(means, ddof=1)/np.sqrt(len(means))
     assert abs(mean - 300) < 9.92*error, (means, mean, error)
+
+
+@pytest.mark.parametrize('precision', ['single', 'mixed'])
+@pytest.mark.parametrize('kind', ['MRattleNoseHooverIntegrator', 'MRattleBussiIntegrator'])
+def test_thermostats_in_single_and_mixed_precision(devicePlatform, precision, kind):
+    """The thermostats' device kernels in the precisions the C++ suite does not run (it runs
+    double): a 64-water box started hot cools towards the bath, and the conserved quantity
+    (kinetic + potential + heat bath) moves far less than the bath's energy."""
+    model = mrattle.models.waterBox(numMolecules=64, cutoff=0.45*unit.nanometers)
+    integrator = getattr(mrattle, kind)(300*unit.kelvin, 20/unit.picosecond, 1*unit.femtoseconds)
+    context = openmm.Context(model.system, integrator, devicePlatform, {'Precision': precision})
+    context.setPositions(model.positions)
+    context.setVelocitiesToTemperature(450*unit.kelvin, 2)
+    conserved, bath = [], []
+    for _ in range(20):
+        integrator.step(20)
+        state = context.getState(getEnergy=True)
+        bath.append(integrator.computeHeatBathEnergy().value_in_unit(unit.kilojoules_per_mole))
+        conserved.append((state.getKineticEnergy() + state.getPotentialEnergy()).value_in_unit(unit.kilojoules_per_mole)
+                         + bath[-1])
+    assert integrator.computeSystemTemperature() < 400*unit.kelvin
+    assert bath[-1] > 200  # it took the excess out
+    assert np.ptp(conserved) < 0.1 * np.ptp(bath)

@@ -1,4 +1,4 @@
-"""python -m mrattle.testInstallation lists the platforms with the plugin's kernels and finds each agreeing with Reference."""
+"""python -m mrattle.testInstallation lists the platforms with the plugin's kernels and finds each agreeing with Reference (MRattleIntegrator, MRattleNoseHooverIntegrator) and running CSVR."""
 import subprocess
 import sys
 
@@ -10,5 +10,10 @@ def test_installation_check_passes_on_every_platform():
                             stderr=subprocess.PIPE, universal_newlines=True, timeout=600)
     assert result.returncode == 0, result.stdout + result.stderr
     assert "Platforms with the plugin's kernels: " + ', '.join(mrattle.PLATFORMS) in result.stdout
+    lines = [line.split() for line in result.stdout.splitlines()]
+    for integrator in ('MRattleIntegrator:', 'MRattleNoseHooverIntegrator:', 'MRattleBussiIntegrator:'):
+        assert [integrator] in lines, result.stdout
     for name in mrattle.PLATFORMS:
-        assert any(line.split()[:2] == [name, 'agrees'] for line in result.stdout.splitlines()), result.stdout
+        # The two deterministic integrators agree with Reference; CSVR (its own random numbers) runs.
+        assert sum(line[:2] == [name, 'agrees'] for line in lines) == 2, result.stdout
+        assert sum(line[:2] == [name, 'runs'] for line in lines) == 1, result.stdout

@@ -19,6 +19,8 @@ namespace MRattlePlugin {
 class RigidBodyIntegrator;
 class MRattleIntegrator;
 class MRattleLangevinIntegrator;
+class MRattleNoseHooverIntegrator;
+class MRattleBussiIntegrator;
 class RigidSplittingIntegrator;
 
 /**
@@ -158,6 +160,50 @@ public:
     typedef MRattleLangevinIntegrator IntegratorType;
     /** One step of this integrator: see RigidBodyKernel's step contract. */
     virtual void execute(OpenMM::ContextImpl& context, const MRattleLangevinIntegrator& integrator, bool& forcesAreValid) = 0;
+};
+
+/** Velocity Verlet with M-RATTLE between two half steps of a Nose-Hoover chain (MRattleNoseHooverIntegrator). */
+class OPENMM_EXPORT_MRATTLE IntegrateMRattleNoseHooverStepKernel : public RigidBodyKernel {
+public:
+    static std::string Name() {
+        return "IntegrateMRattleNoseHooverStep";
+    }
+    /** The integrator's class name, which messages name it by on every platform. */
+    static std::string IntegratorName() {
+        return "MRattleNoseHooverIntegrator";
+    }
+    IntegrateMRattleNoseHooverStepKernel(const std::string& name, const OpenMM::Platform& platform)
+        : RigidBodyKernel(name, platform) {
+    }
+    ~IntegrateMRattleNoseHooverStepKernel() override;
+    /** The integrator that execute() takes. */
+    typedef MRattleNoseHooverIntegrator IntegratorType;
+    /** One step of this integrator: see RigidBodyKernel's step contract (a failed step leaves the chain as it was). */
+    virtual void execute(OpenMM::ContextImpl& context, const MRattleNoseHooverIntegrator& integrator, bool& forcesAreValid) = 0;
+    /** The chain's energy with the integrator's temperature and frequency (MRattleNoseHooverIntegrator::computeHeatBathEnergy). */
+    virtual double computeHeatBathEnergy(OpenMM::ContextImpl& context, const MRattleNoseHooverIntegrator& integrator) = 0;
+};
+
+/** Velocity Verlet with M-RATTLE between two stochastic velocity rescalings (MRattleBussiIntegrator). */
+class OPENMM_EXPORT_MRATTLE IntegrateMRattleBussiStepKernel : public RigidBodyKernel {
+public:
+    static std::string Name() {
+        return "IntegrateMRattleBussiStep";
+    }
+    /** The integrator's class name, which messages name it by on every platform. */
+    static std::string IntegratorName() {
+        return "MRattleBussiIntegrator";
+    }
+    IntegrateMRattleBussiStepKernel(const std::string& name, const OpenMM::Platform& platform)
+        : RigidBodyKernel(name, platform) {
+    }
+    ~IntegrateMRattleBussiStepKernel() override;
+    /** The integrator that execute() takes. */
+    typedef MRattleBussiIntegrator IntegratorType;
+    /** One step of this integrator: see RigidBodyKernel's step contract (a failed step leaves the stream and work as they were). */
+    virtual void execute(OpenMM::ContextImpl& context, const MRattleBussiIntegrator& integrator, bool& forcesAreValid) = 0;
+    /** Minus the accumulated work of the rescalings (MRattleBussiIntegrator::computeHeatBathEnergy). */
+    virtual double computeHeatBathEnergy(OpenMM::ContextImpl& context) = 0;
 };
 
 /** The symplectic splitting baseline: the position update is a free-rotor splitting per body. */

@@ -1,6 +1,7 @@
 #include "CommonMRattleKernelFactory.h"
 #include "CommonMRattleKernels.h"
 #include "CommonMRattleLangevinKernels.h"
+#include "CommonThermostatKernels.h"
 #include "MRattlePlatforms.h"
 #include "internal/RigidBodyKernels.h"
 #include "openmm/OpenMMException.h"
@@ -34,16 +35,17 @@ KernelImpl* make(const std::string& name, const Platform& platform, ComputeConte
 /** The splitting baseline has no device kernel: refused naming the platforms that run it. */
 KernelImpl* refuseRigidSplitting(const std::string& name, const Platform& platform, ComputeContext& cc) {
     throw OpenMMException(IntegrateRigidSplittingStepKernel::IntegratorName() + " (the paper's baseline) runs on the " +
-                          hostPlatformNames() + " platforms only, not on " + platform.getName() + "; " +
-                          IntegrateMRattleStepKernel::IntegratorName() + " and " +
-                          IntegrateMRattleLangevinStepKernel::IntegratorName() + " run there. Create its Context on "
-                          "one of those (Platform::getPlatformByName).");
+                          hostPlatformNames() + " platforms only, not on " + platform.getName() +
+                          "; the plugin's other integrators run there. Create its Context on one of those "
+                          "(Platform::getPlatformByName).");
 }
 
 /** The kernels of the device platforms (OpenCL, CUDA): registered and created from this list alone. */
 const CommonKernel Kernels[] = {
     {IntegrateMRattleStepKernel::Name, make<CommonIntegrateMRattleStepKernel>},
     {IntegrateMRattleLangevinStepKernel::Name, make<CommonIntegrateMRattleLangevinStepKernel>},
+    {IntegrateMRattleNoseHooverStepKernel::Name, make<CommonIntegrateMRattleNoseHooverStepKernel>},
+    {IntegrateMRattleBussiStepKernel::Name, make<CommonIntegrateMRattleBussiStepKernel>},
     {IntegrateRigidSplittingStepKernel::Name, refuseRigidSplitting},
 };
 

@@ -2,6 +2,7 @@
 #include "ReferenceMRattleKernels.h"
 #include "ReferenceMRattleLangevinKernels.h"
 #include "ReferenceRigidSplittingKernels.h"
+#include "ReferenceThermostatKernels.h"
 #include "MRattlePlatforms.h"
 #include "internal/OpenMMVersionCheck.h"
 #include "openmm/OpenMMException.h"
@@ -29,6 +30,8 @@ const ReferenceKernel Kernels[] = {
     {IntegrateMRattleStepKernel::Name, make<ReferenceIntegrateMRattleStepKernel>},
     {IntegrateRigidSplittingStepKernel::Name, make<ReferenceIntegrateRigidSplittingStepKernel>},
     {IntegrateMRattleLangevinStepKernel::Name, make<ReferenceIntegrateMRattleLangevinStepKernel>},
+    {IntegrateMRattleNoseHooverStepKernel::Name, make<ReferenceIntegrateMRattleNoseHooverStepKernel>},
+    {IntegrateMRattleBussiStepKernel::Name, make<ReferenceIntegrateMRattleBussiStepKernel>},
 };
 
 /** A platform of the build's list that this plugin serves (Reference and CPU; the CPU platform derives from Reference). */

@@ -1,0 +1,242 @@
+"""Validation of MRattleNoseHooverIntegrator and MRattleBussiIntegrator (issue 33) on rigid
+TIP3P water (openmm/app/data/tip3p.pdb, amber14/tip3p.xml, PME 0.9 nm, 895 waters, CPU platform).
+
+From one start (LangevinMiddle + SETTLE at 300 K), each method runs at 300 K:
+1. production at 2 fs with M-RATTLE NVE, the Nose-Hoover chain (10/ps), CSVR (10/ps) and
+   LangevinMiddleIntegrator + SETTLE (1/ps): the kinetic energy's mean and variance against the
+   canonical values for N = 6 * 895 - 3 degrees of freedom (mean N kT/2, variance N (kT)^2/2),
+   the potential energy per molecule, the translational and rotational temperatures, and the
+   self-diffusion coefficient (oxygen mean-squared displacement);
+2. short runs at 0.5, 1, 3, 4 and 5 fs (2 fs from 1.) of the three M-RATTLE methods: the
+   conserved quantity's drift (kinetic + potential + the heat bath's energy; NVE's total
+   energy) and the translational and rotational temperatures (on-step velocities).
+Means carry standard errors from 10 block averages; a variance's error comes from the block
+variances. The suite's part `thermostats`; alone: benchmarks/python/thermostat_validation.py.
+"""
+import csv
+import math
+import time
+
+import numpy as np
+import openmm
+from openmm import unit
+
+import mrattle
+
+from . import langevin
+from .stats import drift_with_error
+
+TEMPERATURE = 300.0
+FREQUENCY = 10.0  # 1/ps, both thermostats
+METHODS = ('M-RATTLE NVE', 'M-RATTLE Nose-Hoover chain', 'M-RATTLE CSVR', 'LangevinMiddle + SETTLE')
+BLOCKS = 10
+
+
+def make_integrator(method, step_fs):
+    step = step_fs * unit.femtoseconds
+    if method == 'M-RATTLE NVE':
+        return mrattle.MRattleIntegrator(step)
+    if method == 'M-RATTLE Nose-Hoover chain':
+        return mrattle.MRattleNoseHooverIntegrator(TEMPERATURE, FREQUENCY, step)
+    if method == 'M-RATTLE CSVR':
+        integrator = mrattle.MRattleBussiIntegrator(TEMPERATURE, FREQUENCY, step)
+        integrator.setRandomNumberSeed(5)
+        return integrator
+    if method == 'LangevinMiddle + SETTLE':
+        integrator = openmm.LangevinMiddleIntegrator(TEMPERATURE, 1.0, step)
+        integrator.setRandomNumberSeed(5)
+        return integrator
+    raise ValueError(method)
+
+
+def platform(threads):
+    return openmm.Platform.getPlatformByName('CPU'), {'Threads': str(threads)}
+
+
+def block_variance(values, blocks=BLOCKS):
+    """The variance of a series about its mean and its standard error: the mean squared deviation
+    from the whole series' mean, block-averaged (so the blocks' own means moving is counted)."""
+    values = np.asarray(values, float)
+    squares = (values - values.mean()) ** 2
+    return langevin.block_mean(squares, blocks)
+
+
+def diffusion(times, oxygens, segments=4):
+    """D (1e-5 cm^2/s) from the oxygens' mean-squared displacement: in each of `segments` equal
+    time segments of the run, the slope over lags of 20-60 % of the segment (all time origins
+    in it), D = slope/6; mean and standard error over the segments."""
+    t = np.asarray(times) - times[0]
+    x = np.asarray(oxygens)  # frames x molecules x 3, unwrapped
+    values = []
+    for frames in np.array_split(np.arange(len(t)), segments):
+        ts, xs = t[frames] - t[frames[0]], x[frames]
+        lags = [k for k in range(1, len(ts)) if 0.2 * ts[-1] <= ts[k] <= 0.6 * ts[-1]]
+        msd = [np.mean(np.sum((xs[k:] - xs[:-k]) ** 2, axis=2)) for k in lags]
+        slope = np.polyfit(ts[lags], msd, 1)[0]  # nm^2/ps
+        values.append(slope / 6 * 1e-2 / 1e-5)  # nm^2/ps = 1e-2 cm^2/s
+    return np.mean(values), np.std(values, ddof=1) / math.sqrt(segments)
+
+
+def run_series(method, step_fs, ps, start, system, bodies, threads, sample_fs=10.0, keep_oxygens=False):
+    """One run's series (every sample_fs): time, kinetic, potential, conserved energy, T_trans, T_rot; oxygen positions."""
+    integrator = make_integrator(method, step_fs)
+    context = openmm.Context(system, integrator, *platform(threads))
+    context.setPositions(start[0])
+    context.setVelocities(start[1])
+    rigid = isinstance(integrator, mrattle.RigidBodyIntegrator)
+    bath = getattr(integrator, 'computeHeatBathEnergy', None)
+    masses = np.array([system.getParticleMass(i).value_in_unit(unit.dalton) for i in range(system.getNumParticles())])
+    oxygen = [body[0] for body in bodies]
+    stride = max(1, int(round(sample_fs / step_fs)))
+    series = {key: [] for key in ('time', 'kinetic', 'potential', 'conserved', 'Ttrans', 'Trot')}
+    oxygens = []
+    began = time.time()
+    for _ in range(int(round(ps * 1000 / (stride * step_fs)))):
+        integrator.step(stride)
+        state = context.getState(getEnergy=True, getVelocities=not rigid, getPositions=keep_oxygens)
+        kinetic = state.getKineticEnergy().value_in_unit(unit.kilojoule_per_mole)
+        potential = state.getPotentialEnergy().value_in_unit(unit.kilojoule_per_mole)
+        series['time'].append(state.getTime().value_in_unit(unit.picosecond))
+        series['kinetic'].append(kinetic)
+        series['potential'].append(potential)
+        series['conserved'].append(kinetic + potential + (bath().value_in_unit(unit.kilojoule_per_mole) if bath else 0))
+        if rigid:
+            series['Ttrans'].append(integrator.computeTranslationalTemperature().value_in_unit(unit.kelvin))
+            series['Trot'].append(integrator.computeRotationalTemperature().value_in_unit(unit.kelvin))
+        else:  # its half-step velocities, as LangevinMiddle reports them
+            v = state.getVelocities(asNumpy=True).value_in_unit(unit.nanometer / unit.picosecond)
+            _, ttrans, trot = langevin.temperatures(v, masses, bodies, 6 * len(bodies) - 3, True)
+            series['Ttrans'].append(ttrans)
+            series['Trot'].append(trot)
+        if keep_oxygens:
+            oxygens.append(state.getPositions(asNumpy=True).value_in_unit(unit.nanometer)[oxygen])
+        if not math.isfinite(series['conserved'][-1]):
+            raise ArithmeticError('%s at %g fs: energy not finite' % (method, step_fs))
+    return series, oxygens, time.time() - began
+
+
+CSV_COLUMNS = ['method', 'step_fs', 'ps', 'kinetic_mean', 'kinetic_mean_se', 'kinetic_variance', 'kinetic_variance_se',
+               'potential_per_molecule', 'potential_per_molecule_se', 'Ttrans', 'Ttrans_se', 'Trot', 'Trot_se',
+               'D_1e-5_cm2_per_s', 'D_se', 'drift_kJ_per_mol_ns_per_molecule', 'drift_se', 'failure', 'wall_s']
+STEPS_FS = (2, 0.5, 1, 3, 4, 5)
+
+
+def run(quick, out, log, threads=1, methods=METHODS, steps=None):
+    """Every run; out + '.csv' gets a row per run as it ends; returns the report as markdown lines."""
+    production_ps, short_ps, equilibrate_ps = (0.2, 0.1, 0.05) if quick else (20.0, 2.0, 2.0)
+    began = time.time()
+    pdb, system = langevin.water_system()
+    positions = langevin.exact_geometry(system, pdb.positions)
+    bodies = mrattle.rigidBodies(pdb.topology, system)
+    log('thermostats: equilibrating %g ps (LangevinMiddle + SETTLE, 2 fs)' % equilibrate_ps)
+    equilibration = openmm.LangevinMiddleIntegrator(TEMPERATURE, 1.0, 0.002)
+    equilibration.setRandomNumberSeed(11)
+    context = openmm.Context(system, equilibration, *platform(threads))
+    context.setPositions(positions)
+    context.setVelocitiesToTemperature(TEMPERATURE, 11)
+    equilibration.step(int(round(equilibrate_ps / 0.002)))
+    state = context.getState(getPositions=True, getVelocities=True)
+    start = (state.getPositions(), state.getVelocities())
+    del context
+    with open(out + '.csv', 'w', newline='') as stream:
+        csv.DictWriter(stream, CSV_COLUMNS).writeheader()
+    rows = []
+    for method in methods:
+        for step_fs in steps or STEPS_FS:
+            if method == 'LangevinMiddle + SETTLE' and step_fs != 2:
+                continue
+            row = run_one(method, step_fs, production_ps if step_fs == 2 else short_ps, start, system, bodies, threads)
+            log('thermostats: %s' % row)
+            rows.append(row)
+            with open(out + '.csv', 'a', newline='') as stream:
+                csv.DictWriter(stream, CSV_COLUMNS).writerow(row)
+    return report(rows, len(bodies), quick, production_ps, short_ps, equilibrate_ps, threads,
+                  (time.time() - began) / 60)
+
+
+def run_one(method, step_fs, ps, start, system, bodies, threads):
+    """One run's row: at 2 fs (production) the sampling figures, at every step the temperatures and drift."""
+    production = step_fs == 2
+    try:
+        series, oxygens, wall = run_series(method, step_fs, ps, start, system, bodies, threads, keep_oxygens=production)
+    except Exception as error:  # a blow-up is a result
+        return dict(method=method, step_fs=step_fs, ps=ps, failure=str(error).splitlines()[0])
+    row = dict(method=method, step_fs=step_fs, ps=ps, wall_s=round(wall))
+    if method != 'LangevinMiddle + SETTLE':  # it conserves nothing
+        drift, drift_se = drift_with_error(series['time'], series['conserved'])
+        row['drift_kJ_per_mol_ns_per_molecule'], row['drift_se'] = drift / len(bodies), drift_se / len(bodies)
+    for key in ('Ttrans', 'Trot'):
+        row[key], row[key + '_se'] = langevin.block_mean(series[key], BLOCKS)
+    if production:
+        row['kinetic_mean'], row['kinetic_mean_se'] = langevin.block_mean(series['kinetic'], BLOCKS)
+        row['kinetic_variance'], row['kinetic_variance_se'] = block_variance(series['kinetic'])
+        mean_potential, se_potential = langevin.block_mean(series['potential'], BLOCKS)
+        row['potential_per_molecule'], row['potential_per_molecule_se'] = (mean_potential / len(bodies),
+                                                                           se_potential / len(bodies))
+        row['D_1e-5_cm2_per_s'], row['D_se'] = diffusion(series['time'], oxygens)
+    return row
+
+
+def rows_from_csv(path):
+    """The rows a run wrote (numbers as floats, empty cells dropped)."""
+    rows = []
+    with open(path) as stream:
+        for r in csv.DictReader(stream):
+            rows.append({k: (v if k in ('method', 'failure') else float(v)) for k, v in r.items() if v != ''})
+    return rows
+
+
+def report(rows, molecules, quick, production_ps, short_ps, equilibrate_ps, threads, minutes):
+    dof = 6 * molecules - 3
+    kT = langevin.KB * TEMPERATURE
+    mean_k, variance_k = 0.5 * dof * kT, 0.5 * dof * kT * kT
+
+    def pm(row, key, se, digits=1):
+        return ('%.*f +- %.*f' % (digits, row[key], digits, row[se])) if key in row else '-'
+
+    def sigmas(row, key, se, target):
+        return '%+.1f' % ((row[key] - target) / row[se]) if key in row and row[se] > 0 else '-'
+
+    md = ['\n## Thermostats for rigid water: Nose-Hoover chain and CSVR (issue 33)\n',
+          'OpenMM\'s `app/data/tip3p.pdb` (%d waters, `amber14/tip3p.xml`, PME 0.9 nm, a CMMotionRemover), CPU '
+          'platform with %d thread(s), each water at TIP3P\'s exact geometry; every run starts from one state: %g ps '
+          'of LangevinMiddle + SETTLE at 300 K (1/ps, 2 fs). `MRattleNoseHooverIntegrator` (10/ps, chain of 3, 3 '
+          'sub-steps, Yoshida-Suzuki order 7) and `MRattleBussiIntegrator` (10/ps) at 300 K, beside '
+          '`MRattleIntegrator` (NVE) and `LangevinMiddleIntegrator` + SETTLE (1/ps). %g ps at 2 fs per method, '
+          'sampled every 10 fs; %g ps at the other steps. Means +- standard errors from %d blocks; a variance\'s '
+          'error from the blocks\' mean squared deviations from the run\'s mean. N = %d degrees of freedom: the canonical kinetic '
+          'energy has mean N kT/2 = %.1f kJ/mol and variance N (kT)^2/2 = %.0f (kJ/mol)^2. Diffusion: the '
+          'oxygens\' mean-squared displacement in each quarter of the 2-fs run, over lags of 20-60%% of it (all '
+          'time origins), D = slope/6, mean +- SE over the quarters (no finite-size correction). Drift: least-squares slope of the '
+          'conserved quantity (kinetic + potential + `computeHeatBathEnergy()`; NVE: the total energy), '
+          'kJ/mol/ns per water, its error inflated by the residuals\' statistical inefficiency '
+          '(`benchmarks/python/suite/thermostats.py`, %.0f minutes).%s\n'
+          % (molecules, threads, equilibrate_ps, production_ps, short_ps, BLOCKS, dof, mean_k, variance_k, minutes,
+             ' **Quick smoke run: too short to conclude anything.**' if quick else '')]
+    md.append('### Canonical sampling at 2 fs\n')
+    md.append('| Method | <K> (kJ/mol) | (<K> - canonical)/SE | var K ((kJ/mol)^2) | (var - canonical)/SE | '
+              'U per water (kJ/mol) | D (1e-5 cm^2/s) |')
+    md.append('|---|---|---|---|---|---|---|')
+    for row in rows:
+        if row['step_fs'] != 2:
+            continue
+        if row.get('failure'):
+            md.append('| %s | failed: %s | | | | | |' % (row['method'], row['failure']))
+            continue
+        md.append('| %s | %s | %s | %s | %s | %s | %s |' % (
+            row['method'], pm(row, 'kinetic_mean', 'kinetic_mean_se'),
+            sigmas(row, 'kinetic_mean', 'kinetic_mean_se', mean_k), pm(row, 'kinetic_variance', 'kinetic_variance_se', 0),
+            sigmas(row, 'kinetic_variance', 'kinetic_variance_se', variance_k),
+            pm(row, 'potential_per_molecule', 'potential_per_molecule_se', 3), pm(row, 'D_1e-5_cm2_per_s', 'D_se', 2)))
+    md.append('\n### Conserved quantity and equipartition against the step size\n')
+    md.append('| Method | Step (fs) | Run (ps) | Drift (kJ/mol/ns per water) | T_trans (K) | T_rot (K) |')
+    md.append('|---|---|---|---|---|---|')
+    for row in sorted(rows, key=lambda r: (METHODS.index(r['method']) if r['method'] in METHODS else 99, r['step_fs'])):
+        if row.get('failure'):
+            md.append('| %s | %g | %g | failed: %s | | |' % (row['method'], row['step_fs'], row['ps'], row['failure']))
+            continue
+        md.append('| %s | %g | %g | %s | %s | %s |' % (
+            row['method'], row['step_fs'], row['ps'],
+            pm(row, 'drift_kJ_per_mol_ns_per_molecule', 'drift_se', 3) if 'drift_se' in row else '(none conserved)',
+            pm(row, 'Ttrans', 'Ttrans_se'), pm(row, 'Trot', 'Trot_se')))
+    return md
