@@ -133,17 +133,15 @@ double RigidBodyThermostats::csvrScale(double kineticEnergy, double dof, double 
     return along < 0 ? -alpha : alpha;
 }
 
-std::string RigidBodyThermostats::csvrWorkState(double work) {
-    std::string state(sizeof(work), '\0');
-    std::memcpy(&state[0], &work, sizeof(work));
-    return state;
+void RigidBodyThermostats::writeCsvrWork(std::ostream& stream, double work) {
+    stream.write(reinterpret_cast<const char*>(&work), sizeof(work));
 }
 
-double RigidBodyThermostats::csvrWorkFromState(const std::string& state) {
+double RigidBodyThermostats::readCsvrWork(std::istream& stream) {
     double work;
-    if (state.size() != sizeof(work))
-        throw OpenMMException("the checkpoint's kernel data is malformed (the thermostat's work)");
-    std::memcpy(&work, state.data(), sizeof(work));
+    stream.read(reinterpret_cast<char*>(&work), sizeof(work));
+    if (!stream)
+        throw OpenMMException("the checkpoint is truncated (it ends before the thermostat's work)");
     if (!std::isfinite(work))
         throw OpenMMException("the checkpoint's kernel data is malformed (the thermostat's work is not finite)");
     return work;

@@ -65,10 +65,10 @@ struct OPENMM_EXPORT_MRATTLE NoseHooverChain {
 OPENMM_EXPORT_MRATTLE double csvrScale(double kineticEnergy, double dof, double kT, double frequency, double t,
                                        std::mt19937_64& random);
 
-/** CSVR's accumulated work as a checkpoint's bytes (a kernel's state, bit for bit). */
-OPENMM_EXPORT_MRATTLE std::string csvrWorkState(double work);
-/** The work from csvrWorkState()'s bytes; throws an OpenMMException if they are malformed. */
-OPENMM_EXPORT_MRATTLE double csvrWorkFromState(const std::string& state);
+/** CSVR's accumulated work into a checkpoint (a kernel's state, bit for bit). */
+OPENMM_EXPORT_MRATTLE void writeCsvrWork(std::ostream& stream, double work);
+/** The work writeCsvrWork() wrote; throws an OpenMMException if it is truncated or not finite. */
+OPENMM_EXPORT_MRATTLE double readCsvrWork(std::istream& stream);
 
 } // namespace RigidBodyThermostats
 } // namespace MRattlePlugin

@@ -22,6 +22,8 @@ class ContextImpl;
 
 namespace MRattlePlugin {
 
+class CommonKernelArguments;
+
 class RigidBodyIntegrator;
 
 /**
@@ -61,6 +63,22 @@ public:
     /** The failure flag, for an integrator's own kernels. */
     OpenMM::ComputeArray& failureFlag() {
         return stepFailure.flag();
+    }
+    /**
+     * For an integrator whose own kernel changes the state before the step's first pass (a
+     * thermostat's half step): that kernel backs up the atoms instead, with the arrays
+     * addBackupArguments() adds (posq, its corrections or posq, and the three backups) and
+     * the index this returns (-1: backed up already this step); the first pass then does not.
+     */
+    int takeStepBackup() {
+        const int index = backupStepIndex;
+        backupStepIndex = -1;
+        return index;
+    }
+    void addBackupArguments(CommonKernelArguments& arguments);
+    /** An integrator's own device state and its backup, put back with the atoms' when a step fails (CommonStepFailure::addState). */
+    void addStepState(OpenMM::ComputeArray& state, OpenMM::ComputeArray& backup) {
+        stepFailure.addState(state, backup);
     }
 
     /**

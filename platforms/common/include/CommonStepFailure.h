@@ -72,6 +72,14 @@ public:
     void atomsReordered();
     /** Remember the device's order and cell offsets, which a reordering with a failure pending starts from. */
     void rememberOrder();
+    /**
+     * An integrator's own device state (a thermostat's) and its backup, which the
+     * integrator's first kernel of each step fills while the flag is clear, as the backup
+     * kernel does the atoms': a failure found puts the state back from it too.
+     */
+    void addState(OpenMM::ComputeArray& state, OpenMM::ComputeArray& backup) {
+        states.push_back({&state, &backup});
+    }
     /** Forget unchecked steps and clear the flag (a checkpoint was loaded: its state is the state). */
     void reset();
 
@@ -87,6 +95,8 @@ private:
     /** The same after a reordering: the backups permuted on the host, the cell offsets' change undone. */
     void restoreAcrossReorder();
     void restoreClock(int failedStep);
+    /** The integrators' own states (addState()) from their backups. */
+    void restoreStates();
     std::string message(long long failedStepCount) const;
     /** Forget the unchecked steps. */
     void checked();
@@ -105,6 +115,11 @@ private:
     /** The device order and cell offsets the backups are in (rememberOrder()). */
     std::vector<int> backupOrder;
     std::vector<OpenMM::mm_int4> backupCellOffsets;
+    struct StateAndBackup {
+        OpenMM::ComputeArray* state;
+        OpenMM::ComputeArray* backup;
+    };
+    std::vector<StateAndBackup> states;
     /** A failure found at a reordering, where nothing may throw: thrown by the next check. */
     std::string deferred;
 };

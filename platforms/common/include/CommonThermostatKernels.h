@@ -13,9 +13,11 @@ namespace MRattlePlugin {
  * Velocity Verlet with M-RATTLE between two half steps of a thermostat that scales every
  * velocity by one factor, on the common compute platforms: the thermostat's half step is
  * one device kernel (thermostats.cc) that sums the kinetic energy, computes the factor and
- * scales, so no step reads anything back to the host. The thermostat's device state is
- * copied at the start of each step and put back if the step fails. A subclass supplies the
- * half step and the state.
+ * scales, so no step reads anything back to the host. The first half step of each step
+ * changes the state before the step's first pass, so it makes the step's backup (the atoms'
+ * and the thermostat's) while the failure flag is clear, and CommonStepFailure puts both
+ * back when a step fails (found one step late).
+ * A subclass supplies the half step and the state.
  */
 template <class StepKernel>
 class CommonVelocityScalingStepKernel : public CommonRigidBodyStepKernel<StepKernel> {
@@ -31,11 +33,8 @@ public:
     void execute(OpenMM::ContextImpl& context, const Integrator& integrator, bool& forcesAreValid) override;
 
 protected:
-    /** The thermostat's half step on the device (nothing when it is uncoupled). */
-    virtual void halfStep(const Integrator& integrator) = 0;
-    /** Copy the thermostat's device state aside, or put the copy back. */
-    virtual void backUpState() = 0;
-    virtual void restoreState() = 0;
+    /** The thermostat's half step on the device (nothing when it is uncoupled); the first backs up its state. */
+    virtual void halfStep(const Integrator& integrator, bool first) = 0;
     /** The System's degrees of freedom, by the plugin's rule (RigidBodyTopology). */
     int degreesOfFreedom() const {
         return bodies.getNumDegreesOfFreedom(this->dynamics.bodyDegreesOfFreedom());
@@ -60,7 +59,7 @@ class CommonIntegrateMRattleNoseHooverStepKernel
 public:
     CommonIntegrateMRattleNoseHooverStepKernel(const std::string& name, const OpenMM::Platform& platform,
                                                OpenMM::ComputeContext& cc)
-        : CommonVelocityScalingStepKernel(name, platform, cc, IntegrateMRattleNoseHooverStepKernel::IntegratorName()) {
+        : CommonVelocityScalingStepKernel(name, platform, cc) {
     }
     /** Reads the chain from the device (not a per-step cost: only when asked). */
     double computeHeatBathEnergy(OpenMM::ContextImpl& context, const MRattleNoseHooverIntegrator& integrator) override;
@@ -69,9 +68,7 @@ public:
 
 protected:
     void initializeIntegrator(const OpenMM::System& system, const MRattleNoseHooverIntegrator& integrator) override;
-    void halfStep(const MRattleNoseHooverIntegrator& integrator) override;
-    void backUpState() override;
-    void restoreState() override;
+    void halfStep(const MRattleNoseHooverIntegrator& integrator, bool first) override;
 
 private:
     /** The chain as the host code holds it, from the device. */
@@ -79,7 +76,7 @@ private:
     OpenMM::ComputeProgram program;
     OpenMM::ComputeKernel chainKernel;
     OpenMM::ComputeArray chainPosition, chainVelocity, positionBackup, velocityBackup, weights;
-    int argumentDof, argumentKT, argumentFrequency, argumentHalfStep;
+    int argumentDof, argumentKT, argumentFrequency, argumentHalfStep, argumentBackUp;
     bool argumentsSet = false;
 };
 
@@ -88,7 +85,7 @@ class CommonIntegrateMRattleBussiStepKernel : public CommonVelocityScalingStepKe
 public:
     CommonIntegrateMRattleBussiStepKernel(const std::string& name, const OpenMM::Platform& platform,
                                           OpenMM::ComputeContext& cc)
-        : CommonVelocityScalingStepKernel(name, platform, cc, IntegrateMRattleBussiStepKernel::IntegratorName()) {
+        : CommonVelocityScalingStepKernel(name, platform, cc) {
     }
     /** Reads the work from the device (only when asked). */
     double computeHeatBathEnergy(OpenMM::ContextImpl& context) override;
@@ -97,15 +94,13 @@ public:
 
 protected:
     void initializeIntegrator(const OpenMM::System& system, const MRattleBussiIntegrator& integrator) override;
-    void halfStep(const MRattleBussiIntegrator& integrator) override;
-    void backUpState() override;
-    void restoreState() override;
+    void halfStep(const MRattleBussiIntegrator& integrator, bool first) override;
 
 private:
     OpenMM::ComputeProgram program;
     OpenMM::ComputeKernel rescaleKernel;
     OpenMM::ComputeArray work, workBackup;
-    int argumentRandomIndex, argumentDof, argumentKT, argumentC;
+    int argumentRandomIndex, argumentDof, argumentKT, argumentC, argumentBackUp;
     bool argumentsSet = false;
 };
 

@@ -74,6 +74,14 @@ ComputeProgram CommonRigidBodyDynamics::compileWith(const std::string& sources) 
                              defines);
 }
 
+void CommonRigidBodyDynamics::addBackupArguments(CommonKernelArguments& arguments) {
+    arguments.add(cc.getPosq());
+    arguments.add(cc.getUseMixedPrecision() ? cc.getPosqCorrection() : cc.getPosq());
+    arguments.add(stepFailure.posqBackup());
+    arguments.add(stepFailure.correctionBackup());
+    arguments.add(stepFailure.velmBackup());
+}
+
 void CommonRigidBodyDynamics::addMixedArg(ComputeKernel& kernel, double value) const {
     if (cc.getUseDoublePrecision() || cc.getUseMixedPrecision())
         kernel->addArg(value);

@@ -129,6 +129,7 @@ void CommonStepFailure::atomsReordered() {
         if (values[0] != 0) {
             const long long failedStepCount = stepCountAtCheck + values[1];
             restoreClock(values[1]);
+            restoreStates();
             restoreAcrossReorder();
             failure.upload(vector<int>(2, 0));
             deferred = message(failedStepCount);  // a listener must not throw: the next check does
@@ -170,8 +171,14 @@ void CommonStepFailure::restoreClock(int failedStep) {
     cc.setStepCount(stepCountAtCheck + failedStep);
 }
 
+void CommonStepFailure::restoreStates() {
+    for (const StateAndBackup& s : states)
+        s.backup->copyTo(*s.state);
+}
+
 void CommonStepFailure::restore(int failedStep) {
     restoreClock(failedStep);
+    restoreStates();
     positions.copyTo(cc.getPosq());
     if (cc.getUseMixedPrecision())
         corrections.copyTo(cc.getPosqCorrection());

@@ -1,7 +1,6 @@
 #include "CommonThermostatKernels.h"
 #include "CommonKernelArguments.h"
 #include "CommonMRattleKernelSources.h"
-#include "HostRigidBodyRules.h"
 #include "openmm/OpenMMException.h"
 #include "openmm/common/IntegrationUtilities.h"
 #include "openmm/reference/SimTKOpenMMRealType.h"
@@ -27,19 +26,13 @@ void CommonVelocityScalingStepKernel<StepKernel>::execute(ContextImpl& context, 
     // The thermostat's half step, then velocity Verlet (half kick, drift and reset, new
     // forces, half kick and projection), then the thermostat's second half step.
     dynamics.beginStep(context, integrator, forcesAreValid);
-    backUpState();
-    try {
-        halfStep(integrator);
-        dynamics.driftAndReset(0.5 * h, h, tolerance);
-        dynamics.computeForces(context, integrator, forcesAreValid);
-        dynamics.kick(0.5 * h);
-        dynamics.project(tolerance, false);
-        halfStep(integrator);
-        dynamics.endStep(h, forcesAreValid);
-    } catch (...) {
-        restoreState();  // the particles are put back by endStep; the thermostat here
-        throw;
-    }
+    halfStep(integrator, true);
+    dynamics.driftAndReset(0.5 * h, h, tolerance);
+    dynamics.computeForces(context, integrator, forcesAreValid);
+    dynamics.kick(0.5 * h);
+    dynamics.project(tolerance, false);
+    halfStep(integrator, false);
+    dynamics.endStep(h, forcesAreValid);
 }
 
 template <class StepKernel>
@@ -90,11 +83,13 @@ void CommonIntegrateMRattleNoseHooverStepKernel::initializeIntegrator(const Syst
     const vector<double> w = RigidBodyThermostats::yoshidaSuzukiWeights(integrator.getNumYoshidaSuzukiTimeSteps());
     initializeMixedArray(weights, w.size(), "mrattleYoshidaSuzukiWeights");
     uploadMixed(weights, w);
+    dynamics.addStepState(chainPosition, positionBackup);
+    dynamics.addStepState(chainVelocity, velocityBackup);
     program = compileThermostats();
     chainKernel = program->createKernel("noseHooverChainHalfStep");
 }
 
-void CommonIntegrateMRattleNoseHooverStepKernel::halfStep(const MRattleNoseHooverIntegrator& integrator) {
+void CommonIntegrateMRattleNoseHooverStepKernel::halfStep(const MRattleNoseHooverIntegrator& integrator, bool first) {
     if (integrator.getCollisionFrequency() == 0)
         return;  // the chain does not move: MRattleIntegrator's step (as on the host)
     ComputeContext& cc = dynamics.computeContext();
@@ -113,23 +108,18 @@ void CommonIntegrateMRattleNoseHooverStepKernel::halfStep(const MRattleNoseHoove
         argumentFrequency = arguments.addMixed(0.0);
         argumentHalfStep = arguments.addMixed(0.0);
         arguments.add(dynamics.failureFlag());
+        dynamics.addBackupArguments(arguments);
+        argumentBackUp = arguments.add(-1);
+        arguments.add(positionBackup);
+        arguments.add(velocityBackup);
         argumentsSet = true;
     }
     dynamics.setMixedArg(chainKernel, argumentDof, degreesOfFreedom());
     dynamics.setMixedArg(chainKernel, argumentKT, BOLTZ * integrator.getTemperature());
     dynamics.setMixedArg(chainKernel, argumentFrequency, integrator.getCollisionFrequency());
     dynamics.setMixedArg(chainKernel, argumentHalfStep, 0.5 * integrator.getStepSize());
+    chainKernel->setArg(argumentBackUp, first ? dynamics.takeStepBackup() : -1);
     chainKernel->execute(ThermostatThreads, ThermostatThreads);
-}
-
-void CommonIntegrateMRattleNoseHooverStepKernel::backUpState() {
-    chainPosition.copyTo(positionBackup);
-    chainVelocity.copyTo(velocityBackup);
-}
-
-void CommonIntegrateMRattleNoseHooverStepKernel::restoreState() {
-    positionBackup.copyTo(chainPosition);
-    velocityBackup.copyTo(chainVelocity);
 }
 
 RigidBodyThermostats::NoseHooverChain CommonIntegrateMRattleNoseHooverStepKernel::downloadChain() const {
@@ -147,18 +137,16 @@ double CommonIntegrateMRattleNoseHooverStepKernel::computeHeatBathEnergy(Context
 }
 
 void CommonIntegrateMRattleNoseHooverStepKernel::createCheckpoint(ContextImpl& context, std::ostream& stream) const {
+    // The chain first: the base's state (the bodies' geometry) reads to the end.
+    downloadChain().write(stream);
     CommonVelocityScalingStepKernel::createCheckpoint(context, stream);
-    std::ostringstream state;
-    downloadChain().write(state);
-    HostRigidBodyRules::writeKernelState(stream, state.str());
 }
 
 void CommonIntegrateMRattleNoseHooverStepKernel::loadCheckpoint(ContextImpl& context, std::istream& stream) {
-    CommonVelocityScalingStepKernel::loadCheckpoint(context, stream);
     ContextSelector selector(dynamics.computeContext());
-    std::istringstream state(HostRigidBodyRules::readKernelState(stream));
     RigidBodyThermostats::NoseHooverChain chain(chainPosition.getSize());
-    chain.read(state);
+    chain.read(stream);
+    CommonVelocityScalingStepKernel::loadCheckpoint(context, stream);
     uploadMixed(chainPosition, chain.positions);
     uploadMixed(chainVelocity, chain.velocities);
 }
@@ -173,11 +161,12 @@ void CommonIntegrateMRattleBussiStepKernel::initializeIntegrator(const System& s
         cc.getIntegrationUtilities().initRandomNumberGenerator(integrator.getRandomNumberSeed());
     initializeMixedArray(work, 1, "mrattleThermostatWork");
     initializeMixedArray(workBackup, 1, "mrattleThermostatWorkBackup");
+    dynamics.addStepState(work, workBackup);
     program = compileThermostats();
     rescaleKernel = program->createKernel("stochasticRescalingHalfStep");
 }
 
-void CommonIntegrateMRattleBussiStepKernel::halfStep(const MRattleBussiIntegrator& integrator) {
+void CommonIntegrateMRattleBussiStepKernel::halfStep(const MRattleBussiIntegrator& integrator, bool first) {
     if (integrator.getCollisionFrequency() == 0)
         return;  // no coupling: MRattleIntegrator's step, nothing drawn (as on the host)
     ComputeContext& cc = dynamics.computeContext();
@@ -193,6 +182,9 @@ void CommonIntegrateMRattleBussiStepKernel::halfStep(const MRattleBussiIntegrato
         argumentC = arguments.addMixed(0.0);
         arguments.add(work);
         arguments.add(dynamics.failureFlag());
+        dynamics.addBackupArguments(arguments);
+        argumentBackUp = arguments.add(-1);
+        arguments.add(workBackup);
         argumentsSet = true;
     }
     // dof Gaussian numbers: at most 3 per atom, so the 4 per padded atom of one draw suffice.
@@ -201,15 +193,8 @@ void CommonIntegrateMRattleBussiStepKernel::halfStep(const MRattleBussiIntegrato
     rescaleKernel->setArg(argumentDof, dof);
     dynamics.setMixedArg(rescaleKernel, argumentKT, BOLTZ * integrator.getTemperature());
     dynamics.setMixedArg(rescaleKernel, argumentC, std::exp(-integrator.getCollisionFrequency() * 0.5 * integrator.getStepSize()));
+    rescaleKernel->setArg(argumentBackUp, first ? dynamics.takeStepBackup() : -1);
     rescaleKernel->execute(ThermostatThreads, ThermostatThreads);
-}
-
-void CommonIntegrateMRattleBussiStepKernel::backUpState() {
-    work.copyTo(workBackup);
-}
-
-void CommonIntegrateMRattleBussiStepKernel::restoreState() {
-    workBackup.copyTo(work);
 }
 
 double CommonIntegrateMRattleBussiStepKernel::computeHeatBathEnergy(ContextImpl& context) {
@@ -218,13 +203,15 @@ double CommonIntegrateMRattleBussiStepKernel::computeHeatBathEnergy(ContextImpl&
 }
 
 void CommonIntegrateMRattleBussiStepKernel::createCheckpoint(ContextImpl& context, std::ostream& stream) const {
-    CommonVelocityScalingStepKernel::createCheckpoint(context, stream);  // the random stream (on a device, OpenMM's part holds it)
-    HostRigidBodyRules::writeKernelState(stream, RigidBodyThermostats::csvrWorkState(downloadMixed(work)[0]));
+    // The work first: the base's state (the bodies' geometry) reads to the end. The random
+    // stream is OpenMM's, in OpenMM's part of the checkpoint.
+    RigidBodyThermostats::writeCsvrWork(stream, downloadMixed(work)[0]);
+    CommonVelocityScalingStepKernel::createCheckpoint(context, stream);
 }
 
 void CommonIntegrateMRattleBussiStepKernel::loadCheckpoint(ContextImpl& context, std::istream& stream) {
-    CommonVelocityScalingStepKernel::loadCheckpoint(context, stream);
     ContextSelector selector(dynamics.computeContext());
-    const double value = RigidBodyThermostats::csvrWorkFromState(HostRigidBodyRules::readKernelState(stream));
+    const double value = RigidBodyThermostats::readCsvrWork(stream);
+    CommonVelocityScalingStepKernel::loadCheckpoint(context, stream);
     uploadMixed(work, vector<double>(1, value));
 }

@@ -1,5 +1,4 @@
 #include "ReferenceThermostatKernels.h"
-#include "HostRigidBodyRules.h"
 #include "openmm/reference/SimTKOpenMMRealType.h"
 #include <sstream>
 
@@ -63,16 +62,14 @@ double ReferenceIntegrateMRattleNoseHooverStepKernel::computeHeatBathEnergy(Cont
 }
 
 void ReferenceIntegrateMRattleNoseHooverStepKernel::createCheckpoint(ContextImpl& context, std::ostream& stream) const {
+    // The chain first: the base's state (a text random state) reads to the end.
+    chain.write(stream);
     ReferenceVelocityScalingStepKernel::createCheckpoint(context, stream);
-    std::ostringstream state;
-    chain.write(state);
-    HostRigidBodyRules::writeKernelState(stream, state.str());
 }
 
 void ReferenceIntegrateMRattleNoseHooverStepKernel::loadCheckpoint(ContextImpl& context, std::istream& stream) {
+    chain.read(stream);
     ReferenceVelocityScalingStepKernel::loadCheckpoint(context, stream);
-    std::istringstream state(HostRigidBodyRules::readKernelState(stream));
-    chain.read(state);
 }
 
 // ---- CSVR ----------------------------------------------------------------------------------
@@ -94,11 +91,13 @@ double ReferenceIntegrateMRattleBussiStepKernel::halfStepScale(double kineticEne
 }
 
 void ReferenceIntegrateMRattleBussiStepKernel::createCheckpoint(ContextImpl& context, std::ostream& stream) const {
-    ReferenceVelocityScalingStepKernel::createCheckpoint(context, stream);  // the random stream
-    HostRigidBodyRules::writeKernelState(stream, RigidBodyThermostats::csvrWorkState(work));
+    // The work first: the base's state (the random stream, as text) reads to the end.
+    RigidBodyThermostats::writeCsvrWork(stream, work);
+    ReferenceVelocityScalingStepKernel::createCheckpoint(context, stream);
 }
 
 void ReferenceIntegrateMRattleBussiStepKernel::loadCheckpoint(ContextImpl& context, std::istream& stream) {
+    const double checkpointWork = RigidBodyThermostats::readCsvrWork(stream);
     ReferenceVelocityScalingStepKernel::loadCheckpoint(context, stream);
-    work = RigidBodyThermostats::csvrWorkFromState(HostRigidBodyRules::readKernelState(stream));
+    work = checkpointWork;
 }

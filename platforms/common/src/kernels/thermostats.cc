@@ -8,6 +8,21 @@
  * (See bodyMath.cc for the program's layout and the failure flag.)
  */
 
+/**
+ * The step's backup of the atoms (backupStepIndex >= 0: this is the step's first kernel that
+ * changes the state, the flag clear), as the step's first pass would make it (advance.cc).
+ */
+DEVICE void backupAtoms(int numAtoms, GLOBAL const real4* RESTRICT posq, GLOBAL const real4* RESTRICT posqCorrection,
+        GLOBAL const mixed4* RESTRICT velm, GLOBAL real4* RESTRICT posqBackup, GLOBAL real4* RESTRICT correctionBackup,
+        GLOBAL mixed4* RESTRICT velmBackup, int backupStepIndex, GLOBAL int* RESTRICT failure) {
+    if (backupStepIndex < 0)
+        return;
+    if (LOCAL_ID == 0)
+        failure[1] = backupStepIndex;
+    for (int atom = LOCAL_ID; atom < numAtoms; atom += LOCAL_SIZE)
+        backupAtom(atom, posq, posqCorrection, velm, posqBackup, correctionBackup, velmBackup);
+}
+
 /** Sum two arrays of the work group (one value per work item) into their first elements. */
 DEVICE void sumOverGroup(LOCAL_ARG mixed* sums, LOCAL_ARG mixed* sums2) {
     SYNC_THREADS;
@@ -74,9 +89,12 @@ DEVICE void chainHalfUpdate(int j, mixed s, int chainLength, mixed twiceKinetic,
 KERNEL void noseHooverChainHalfStep(int numAtoms, GLOBAL mixed4* RESTRICT velm, int chainLength,
         GLOBAL mixed* RESTRICT chainPosition, GLOBAL mixed* RESTRICT chainVelocity, GLOBAL const mixed* RESTRICT weights,
         int numWeights, int numMTS, mixed dof, mixed kT, mixed frequency, mixed halfStep,
-        GLOBAL int* RESTRICT failure) {
+        GLOBAL int* RESTRICT failure, GLOBAL const real4* RESTRICT posq, GLOBAL const real4* RESTRICT posqCorrection,
+        GLOBAL real4* RESTRICT posqBackup, GLOBAL real4* RESTRICT correctionBackup, GLOBAL mixed4* RESTRICT velmBackup,
+        int backupStepIndex, GLOBAL mixed* RESTRICT chainPositionBackup, GLOBAL mixed* RESTRICT chainVelocityBackup) {
     if (failure[0] != 0)
         return;
+    backupAtoms(numAtoms, posq, posqCorrection, velm, posqBackup, correctionBackup, velmBackup, backupStepIndex, failure);
     LOCAL mixed sums[THERMOSTAT_THREADS];
     LOCAL mixed unused[THERMOSTAT_THREADS];
     LOCAL mixed factor;
@@ -84,6 +102,11 @@ KERNEL void noseHooverChainHalfStep(int numAtoms, GLOBAL mixed4* RESTRICT velm, 
     unused[LOCAL_ID] = 0;
     sumOverGroup(sums, unused);
     if (LOCAL_ID == 0) {
+        if (backupStepIndex >= 0)  // the chain before the step
+            for (int j = 0; j < chainLength; j++) {
+                chainPositionBackup[j] = chainPosition[j];
+                chainVelocityBackup[j] = chainVelocity[j];
+            }
         const mixed w2 = frequency*frequency;
         mixed twiceKinetic = sums[0], scale = 1;
         for (int mts = 0; mts < numMTS; mts++)
@@ -113,9 +136,12 @@ KERNEL void noseHooverChainHalfStep(int numAtoms, GLOBAL mixed4* RESTRICT velm, 
  */
 KERNEL void stochasticRescalingHalfStep(int numAtoms, GLOBAL mixed4* RESTRICT velm, GLOBAL const float4* RESTRICT random,
         unsigned int randomIndex, int dof, mixed kT, mixed c, GLOBAL mixed* RESTRICT work,
-        GLOBAL int* RESTRICT failure) {
+        GLOBAL int* RESTRICT failure, GLOBAL const real4* RESTRICT posq, GLOBAL const real4* RESTRICT posqCorrection,
+        GLOBAL real4* RESTRICT posqBackup, GLOBAL real4* RESTRICT correctionBackup, GLOBAL mixed4* RESTRICT velmBackup,
+        int backupStepIndex, GLOBAL mixed* RESTRICT workBackup) {
     if (failure[0] != 0)
         return;
+    backupAtoms(numAtoms, posq, posqCorrection, velm, posqBackup, correctionBackup, velmBackup, backupStepIndex, failure);
     LOCAL mixed sums[THERMOSTAT_THREADS];
     LOCAL mixed squares[THERMOSTAT_THREADS];
     LOCAL mixed factor;
@@ -127,6 +153,8 @@ KERNEL void stochasticRescalingHalfStep(int numAtoms, GLOBAL mixed4* RESTRICT ve
     squares[LOCAL_ID] = sum;
     sumOverGroup(sums, squares);
     if (LOCAL_ID == 0) {
+        if (backupStepIndex >= 0)  // the work before the step
+            workBackup[0] = work[0];
         const mixed kinetic = 0.5f*sums[0], meanKinetic = 0.5f*dof*kT;
         mixed alpha = 1;
         if (kinetic > 0 && dof > 0) {
