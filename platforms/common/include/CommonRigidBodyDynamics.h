@@ -12,6 +12,7 @@
 #include "openmm/common/ComputeKernel.h"
 #include "openmm/common/ComputeProgram.h"
 #include <iosfwd>
+#include <map>
 #include <memory>
 #include <string>
 #include <vector>
@@ -51,6 +52,13 @@ public:
     }
     /** A program of the step's device code with these sources appended (an integrator's own kernels). */
     OpenMM::ComputeProgram compileWith(const std::string& sources);
+    /**
+     * What compileWith hands to ComputeContext::compileProgram, for a Context's precision
+     * flags: the step's device code with these sources appended, and its defines (the host's
+     * constants). Static, so the CUDA program check (platforms/cuda/check) compiles the same text.
+     */
+    static std::string programSource(const std::string& sources);
+    static std::map<std::string, std::string> programDefines(bool useDouble, bool useMixed);
     /** Add or set a kernel argument in the precision of the integration arithmetic ('mixed'). */
     void addMixedArg(OpenMM::ComputeKernel& kernel, double value) const;
     void setMixedArg(OpenMM::ComputeKernel& kernel, int index, double value) const;
@@ -155,7 +163,10 @@ private:
      * (In double it would only add state that a State does not hold.)
      */
     bool rebuildsShapes() const {
-        return !cc.getUseDoublePrecision();
+        return rebuildsShapes(cc.getUseDoublePrecision());
+    }
+    static bool rebuildsShapes(bool useDouble) {
+        return !useDouble;
     }
     /** The bodies' reference geometry from these positions (System order). */
     void setReference(const std::vector<OpenMM::Vec3>& positions);

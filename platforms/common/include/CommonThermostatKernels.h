@@ -9,6 +9,11 @@
 
 namespace MRattlePlugin {
 
+/** The number of work items of the thermostat's work group (THERMOSTAT_THREADS in thermostats.cc). */
+const int ThermostatThreads = 128;
+/** thermostats.cc with its work-group size: what the thermostats append to the step's program. */
+std::string thermostatSources();
+
 /**
  * Velocity Verlet with M-RATTLE between two half steps of a thermostat that scales every
  * velocity by one factor, on the common compute platforms: the thermostat's half step is
@@ -39,8 +44,6 @@ protected:
     int degreesOfFreedom() const {
         return bodies.getNumDegreesOfFreedom(this->dynamics.bodyDegreesOfFreedom());
     }
-    /** The number of work items of the thermostat's work group (THERMOSTAT_THREADS in thermostats.cc). */
-    static const int ThermostatThreads = 128;
     /** thermostats.cc compiled with the step's program. */
     OpenMM::ComputeProgram compileThermostats();
     /** A device array of this many numbers in the integration arithmetic's precision ('mixed'). */

@@ -48,12 +48,12 @@ int CommonRigidBodyDynamics::shapeCode(RigidBodyMath::Shape shape) {
     return static_cast<int>(shape);
 }
 
-ComputeProgram CommonRigidBodyDynamics::compileWith(const std::string& sources) {
-    const bool doublePrecision = cc.getUseDoublePrecision() || cc.getUseMixedPrecision();
+std::map<std::string, std::string> CommonRigidBodyDynamics::programDefines(bool useDouble, bool useMixed) {
+    const bool doublePrecision = useDouble || useMixed;
     std::map<std::string, std::string> defines;
     if (doublePrecision)
         defines["USE_DOUBLE_MIXED"] = "1";
-    if (rebuildsShapes())
+    if (rebuildsShapes(useDouble))
         defines["REBUILD_SHAPES"] = "1";
     defines["MAX_ROTATION_ITERATIONS"] = std::to_string(RigidBodyMath::MaxRotationIterations);
     defines["MAX_CONSTRAINT_ITERATIONS"] = std::to_string(MaxConstraintIterations);
@@ -68,10 +68,18 @@ ComputeProgram CommonRigidBodyDynamics::compileWith(const std::string& sources) 
     defines["SHAPE_GENERAL"] = std::to_string(shapeCode(RigidBodyMath::Shape::General));
     defines["SHAPE_LINEAR"] = std::to_string(shapeCode(RigidBodyMath::Shape::Linear));
     defines["SHAPE_POINT"] = std::to_string(shapeCode(RigidBodyMath::Shape::Point));
-    return cc.compileProgram(CommonMRattleKernelSources::bodyMath + CommonMRattleKernelSources::rotation +
-                                 CommonMRattleKernelSources::step + CommonMRattleKernelSources::freeConstraints +
-                                 CommonMRattleKernelSources::projection + CommonMRattleKernelSources::advance + sources,
-                             defines);
+    return defines;
+}
+
+std::string CommonRigidBodyDynamics::programSource(const std::string& sources) {
+    return CommonMRattleKernelSources::bodyMath + CommonMRattleKernelSources::rotation + CommonMRattleKernelSources::step +
+           CommonMRattleKernelSources::freeConstraints + CommonMRattleKernelSources::projection +
+           CommonMRattleKernelSources::advance + sources;
+}
+
+ComputeProgram CommonRigidBodyDynamics::compileWith(const std::string& sources) {
+    return cc.compileProgram(programSource(sources),
+                             programDefines(cc.getUseDoublePrecision(), cc.getUseMixedPrecision()));
 }
 
 void CommonRigidBodyDynamics::addBackupArguments(CommonKernelArguments& arguments) {

@@ -17,6 +17,10 @@ bool doubleMixed(ComputeContext& cc) {
 }
 } // namespace
 
+std::string MRattlePlugin::thermostatSources() {
+    return "#define THERMOSTAT_THREADS " + std::to_string(ThermostatThreads) + "\n" + CommonMRattleKernelSources::thermostats;
+}
+
 template <class StepKernel>
 void CommonVelocityScalingStepKernel<StepKernel>::execute(ContextImpl& context, const Integrator& integrator,
                                                           bool& forcesAreValid) {
@@ -37,8 +41,7 @@ void CommonVelocityScalingStepKernel<StepKernel>::execute(ContextImpl& context, 
 
 template <class StepKernel>
 ComputeProgram CommonVelocityScalingStepKernel<StepKernel>::compileThermostats() {
-    return this->dynamics.compileWith("#define THERMOSTAT_THREADS " + std::to_string(ThermostatThreads) + "\n" +
-                                      CommonMRattleKernelSources::thermostats);
+    return this->dynamics.compileWith(thermostatSources());
 }
 
 template <class StepKernel>
