@@ -10,7 +10,8 @@
 #       (mixed precision, TIP3P boxes of 24,000, 98,304 and 985,527 atoms, bare and PME), one
 #       process per group under a hard limit, then the other tests' CUDA cases with what is
 #       left. Writes two files to $OUT (the device tool's output folder), else .gpu/out:
-#       gpu-check.tar.gz (everything) and gpu-check-summary.txt.
+#       gpu-check.tar.gz (everything) and gpu-check-summary.txt. Where there is no CUDA device
+#       (no driver, or none that nvidia-smi sees) it says so in both, runs nothing and exits 3.
 #
 # Nothing in .gpu/ is built there: the machine has CUDA 13 and its driver, no Python OpenMM,
 # no network. OpenMM's CUDA platform needs libcuda (the driver), libnvrtc and libcufft from
@@ -80,6 +81,21 @@ cuda_library_dirs() {
     done | awk '!seen[$0]++'
 }
 
+# Why CUDA cannot run here, or nothing: no driver (libcuda.so.1, a stub not counting) in the
+# folders found, or a driver whose nvidia-smi lists no GPU.
+no_cuda_device() {
+    local dirs="$1" dir
+    for dir in ${dirs//:/ }; do
+        if [ -e "$dir/libcuda.so.1" ]; then
+            if command -v nvidia-smi > /dev/null && ! nvidia-smi -L 2>/dev/null | grep -q '^GPU '; then
+                echo "the CUDA driver is here ($dir/libcuda.so.1) but nvidia-smi lists no GPU"
+            fi
+            return 0
+        fi
+    done
+    echo "no CUDA driver (libcuda.so.1) on this machine, only what a toolkit has (its stubs/ do not count)"
+}
+
 run_check() {
     [ -f "$stage/MANIFEST" ] || { echo "gpu-check: no $stage (run 'scripts/gpu-check.sh stage' where it was built, carry .gpu)"; exit 1; }
     # At most 8 result files come back: everything goes into one archive, plus a summary.
@@ -103,6 +119,16 @@ run_check() {
         ldd "$OPENMM_PLUGIN_DIR/libOpenMMCUDA.so" | grep -E "not found|cuda|nvrtc|cufft" || true
     } > "$work/environment.txt" 2>&1
     cat "$work/environment.txt"
+    local problem
+    problem="$(no_cuda_device "$dirs")"
+    if [ -n "$problem" ]; then
+        # Nothing can run: say why in both result files rather than let every program fail.
+        echo "gpu-check: no CUDA device: $problem; nothing was run" | tee "$work/summary.txt"
+        tar -czf "$out/gpu-check.tar.gz" -C "$work" .
+        cp "$work/summary.txt" "$out/gpu-check-summary.txt"
+        rm -rf "$work"
+        exit 3
+    fi
 
     # 1. The device test first (agreement, rigidity, failures), at most 120 s.
     echo "== TestDevicePlatforms (CUDA) =="
