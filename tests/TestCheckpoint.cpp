@@ -13,11 +13,7 @@
  * - stepping writes no Context checkpoint, whatever global parameters a refused
  *   checkpoint left behind.
  */
-#include "RigidSplittingIntegrator.h"
 #include "TestSupport.h"
-#include "MRattleBussiIntegrator.h"
-#include "MRattleLangevinIntegrator.h"
-#include "MRattleNoseHooverIntegrator.h"
 #include "openmm/serialization/XmlSerializer.h"
 #include <gtest/gtest.h>
 #include <algorithm>
@@ -428,26 +424,6 @@ TEST_P(Checkpoint, RefusesTruncatedCheckpoint) {
     expectRefusedUntilStateIsSet(run, checkpoint.substr(0, offset / 3), {"truncated"});
 }
 
-namespace {
-
-/** An integrator that counts the checkpoints written of its Context. */
-template <class Base>
-class CountingCheckpoints : public Base {
-public:
-    template <class... Arguments>
-    explicit CountingCheckpoints(Arguments... arguments) : Base(arguments...) {
-    }
-    mutable int checkpointsWritten = 0;
-
-protected:
-    void createCheckpoint(std::ostream& stream) const override {
-        checkpointsWritten++;
-        Base::createCheckpoint(stream);
-    }
-};
-
-} // namespace
-
 TEST_P(Checkpoint, SteppingWritesNoCheckpointEvenWithJunkLeftByARefusedOne) {
     // A checkpoint from another System, with a global parameter this one lacks, and other
     // bodies: OpenMM adds the parameter before the integrator refuses the checkpoint.
@@ -461,37 +437,10 @@ TEST_P(Checkpoint, SteppingWritesNoCheckpointEvenWithJunkLeftByARefusedOne) {
     otherContext.setPositions(other.positions);
     const string junkCheckpoint = checkpointOf(otherContext);
 
-    std::unique_ptr<RigidBodyIntegrator> counting;
-    int* checkpointsWritten = nullptr;
-    if (GetParam().integrator == "MRattle") {
-        auto* integrator = new CountingCheckpoints<MRattleIntegrator>(0.002);
-        checkpointsWritten = &integrator->checkpointsWritten;
-        counting.reset(integrator);
-    }
-    else if (GetParam().integrator == "MRattleLangevin") {
-        auto* integrator = new CountingCheckpoints<MRattleLangevinIntegrator>(300.0, 1.0, 0.002);
-        checkpointsWritten = &integrator->checkpointsWritten;
-        counting.reset(integrator);
-    }
-    else if (GetParam().integrator == "RigidSplitting") {
-        auto* integrator = new CountingCheckpoints<RigidSplittingIntegrator>(0.002);
-        checkpointsWritten = &integrator->checkpointsWritten;
-        counting.reset(integrator);
-    }
-    else if (GetParam().integrator == "MRattleNoseHoover") {
-        auto* integrator = new CountingCheckpoints<MRattleNoseHooverIntegrator>(300.0, 10.0, 0.002);
-        checkpointsWritten = &integrator->checkpointsWritten;
-        counting.reset(integrator);
-    }
-    else if (GetParam().integrator == "MRattleBussi") {
-        auto* integrator = new CountingCheckpoints<MRattleBussiIntegrator>(300.0, 10.0, 0.002);
-        checkpointsWritten = &integrator->checkpointsWritten;
-        counting.reset(integrator);
-    }
-    else
-        FAIL() << "add " << GetParam().integrator << "'s CountingCheckpoints here (a subclass of each integrator class)";
+    std::unique_ptr<RigidBodyIntegrator> counting = makeCountingCheckpoints(GetParam().integrator, 0.002);
+    const CheckpointCounter& counter = dynamic_cast<const CheckpointCounter&>(*counting);
     TestRun run(GetParam(), std::move(counting), WithThermostat);
-    auto written = [&] { return *checkpointsWritten; };
+    auto written = [&] { return counter.checkpointsWritten; };
     run.context->setParameter(AndersenThermostat::Temperature(), 310);
     State saved = run.context->getState(State::Positions | State::Velocities | State::Parameters);
     const string refusal = messageOf([&] { loadCheckpoint(*run.context, junkCheckpoint); });

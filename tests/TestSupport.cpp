@@ -107,27 +107,66 @@ std::string unavailable(const std::string& name) {
     return reasons[name];
 }
 
+namespace {
+
+/** An integrator class that counts the checkpoints written of its Context. */
+template <class Integrator>
+class CountingCheckpoints : public Integrator, public CheckpointCounter {
+public:
+    using Integrator::Integrator;
+
+protected:
+    void createCheckpoint(std::ostream& stream) const override {
+        checkpointsWritten++;
+        Integrator::createCheckpoint(stream);
+    }
+};
+
+/** new Class(arguments...). */
+template <class Class>
+struct Construct {
+    template <class... Arguments>
+    Class* operator()(Arguments... arguments) const {
+        return new Class(arguments...);
+    }
+};
+
+/**
+ * An entry's IntegratorMaker from build(construct, stepSize), which makes the integrator by
+ * construct(its constructor's arguments) and sets the rest: given Construct<Class> and
+ * Construct<CountingCheckpoints<Class>>, the one build makes both with the same settings.
+ */
+template <class Class, class Build>
+IntegratorMaker maker(Build build) {
+    using MRattlePlugin::RigidBodyIntegrator;
+    return {[build](double h) -> RigidBodyIntegrator* { return build(Construct<Class>(), h); },
+            [build](double h) -> RigidBodyIntegrator* { return build(Construct<CountingCheckpoints<Class> >(), h); }};
+}
+
+} // namespace
+
 const std::vector<IntegratorTraits>& integrators() {
     using namespace MRattlePlugin;
     static const std::vector<IntegratorTraits> list = {
         // name, conservesEnergy, stochastic, runsOnDevicePlatforms, hasOwnState, rescalesVelocities, make, removeNoise
-        {"MRattle", true, false, true, false, false, [](double h) { return new MRattleIntegrator(h); }},
+        {"MRattle", true, false, true, false, false, maker<MRattleIntegrator>([](auto make, double h) { return make(h); })},
         {"MRattleLangevin", false, true, true, true, false,
-         [](double h) {
-             auto* langevin = new MRattleLangevinIntegrator(300.0, 1.0, h);
+         maker<MRattleLangevinIntegrator>([](auto make, double h) {
+             auto* langevin = make(300.0, 1.0, h);
              langevin->setRandomNumberSeed(2024);
              return langevin;
-         },
+         }),
          [](RigidBodyIntegrator& integrator) { dynamic_cast<MRattleLangevinIntegrator&>(integrator).setFriction(0); }},
-        {"RigidSplitting", true, false, false, false, false, [](double h) { return new RigidSplittingIntegrator(h); }},
+        {"RigidSplitting", true, false, false, false, false,
+         maker<RigidSplittingIntegrator>([](auto make, double h) { return make(h); })},
         {"MRattleNoseHoover", false, false, true, true, true,  // 300 K, 10/ps, chain of 3, MTS 3, Yoshida-Suzuki 7
-         [](double h) { return new MRattleNoseHooverIntegrator(300.0, 10.0, h); }},
+         maker<MRattleNoseHooverIntegrator>([](auto make, double h) { return make(300.0, 10.0, h); })},
         {"MRattleBussi", false, true, true, true, true,
-         [](double h) {
-             auto* bussi = new MRattleBussiIntegrator(300.0, 10.0, h);
+         maker<MRattleBussiIntegrator>([](auto make, double h) {
+             auto* bussi = make(300.0, 10.0, h);
              bussi->setRandomNumberSeed(2024);
              return bussi;
-         },
+         }),
          [](RigidBodyIntegrator& integrator) {
              dynamic_cast<MRattleBussiIntegrator&>(integrator).setCollisionFrequency(0);
          }},
@@ -172,6 +211,14 @@ std::string configName(const ::testing::TestParamInfo<Config>& info) {
 
 std::unique_ptr<MRattlePlugin::RigidBodyIntegrator> makeIntegrator(const std::string& kind, double stepSize) {
     return std::unique_ptr<MRattlePlugin::RigidBodyIntegrator>(integratorTraits(kind).make(stepSize));
+}
+
+std::unique_ptr<MRattlePlugin::RigidBodyIntegrator> makeCountingCheckpoints(const std::string& kind, double stepSize) {
+    const IntegratorMaker& make = integratorTraits(kind).make;
+    if (!make.countingCheckpoints)
+        throw OpenMMException("integrators()'s entry for " + kind +
+                              " makes no checkpoint-counting integrator: write its make as maker<Class>(...)");
+    return std::unique_ptr<MRattlePlugin::RigidBodyIntegrator>(make.countingCheckpoints(stepSize));
 }
 
 std::map<std::string, std::string> platformProperties(const std::string& name) {

@@ -16,6 +16,25 @@ namespace MRattleTest {
 void loadPlugins();
 OpenMM::Platform& platform(const std::string& name);
 
+/** Counts the checkpoints written of an integrator's Context (its createCheckpoint() calls). */
+struct CheckpointCounter {
+    virtual ~CheckpointCounter() = default;
+    mutable int checkpointsWritten = 0;
+};
+
+/**
+ * How an entry of integrators() makes its integrator, written once (maker<Class>(build) in
+ * TestSupport.cpp): of its class, or of a subclass of it that is also a CheckpointCounter,
+ * with the same settings.
+ */
+struct IntegratorMaker {
+    std::function<MRattlePlugin::RigidBodyIntegrator*(double stepSize)> plain;
+    std::function<MRattlePlugin::RigidBodyIntegrator*(double stepSize)> countingCheckpoints;
+    MRattlePlugin::RigidBodyIntegrator* operator()(double stepSize) const {
+        return plain(stepSize);
+    }
+};
+
 /**
  * A rigid-body integrator as the generic suites see it: what it is called, what it
  * promises, where it runs and how to make one. integrators() lists them: a new integrator
@@ -38,8 +57,11 @@ struct IntegratorTraits {
     bool hasOwnState;
     /** Its step first scales every velocity by a thermostat's factor: a motion a test sets up is changed before the drift. */
     bool rescalesVelocities;
-    /** One with this step size (a thermostat: 300 K, 1/ps, a fixed random seed: two Contexts draw the same noise). */
-    std::function<MRattlePlugin::RigidBodyIntegrator*(double stepSize)> make;
+    /**
+     * One with this step size (a thermostat: 300 K, a fixed random seed: two Contexts draw the
+     * same noise); written as maker<Class>(...), which also makes the checkpoint-counting one.
+     */
+    IntegratorMaker make;
     /** A stochastic one's noise turned off (device and host draw different numbers: what is left must agree); else none. */
     std::function<void(MRattlePlugin::RigidBodyIntegrator&)> removeNoise;
 };
@@ -88,6 +110,8 @@ std::string unavailable(const std::string& name);
 std::string configName(const ::testing::TestParamInfo<Config>& info);
 /** The integrator of that name in integrators(). */
 std::unique_ptr<MRattlePlugin::RigidBodyIntegrator> makeIntegrator(const std::string& kind, double stepSize);
+/** The same, of a subclass that counts the checkpoints written of its Context: dynamic_cast it to CheckpointCounter. */
+std::unique_ptr<MRattlePlugin::RigidBodyIntegrator> makeCountingCheckpoints(const std::string& kind, double stepSize);
 /** Platform properties of the tests: one thread on CPU (several sum forces in varying order), double precision on OpenCL. */
 std::map<std::string, std::string> platformProperties(const std::string& platform);
 

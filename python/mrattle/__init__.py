@@ -50,8 +50,11 @@ def _hasPlatform(name):
 
 
 # The SWIG module first: it loads libMRattlePlugin.so, which the kernel plugin needs.
-from .integrators import (RigidBodyIntegrator, MRattleIntegrator, MRattleLangevinIntegrator, RigidSplittingIntegrator,
-                          MRattleNoseHooverIntegrator, MRattleBussiIntegrator)
+from .integrators import RigidBodyIntegrator, INTEGRATOR_CLASSES
+
+# INTEGRATOR_CLASSES: the integrator classes (MRattleIntegrator, ...), one registered by each
+# MRATTLE_INTEGRATOR line of the SWIG module; the package exports each by its name.
+globals().update((_class.__name__, _class) for _class in INTEGRATOR_CLASSES)
 
 def _loadKernelPlugins():
     """{platform: kernel plugin path} for the build's platforms (_plugin_location.PLATFORMS) that OpenMM has."""
@@ -87,7 +90,7 @@ _installXmlSerializerHooks()
 _installMinimizerHook()
 
 
-__all__ = ['RigidBodyIntegrator', 'MRattleIntegrator', 'MRattleLangevinIntegrator', 'RigidSplittingIntegrator',
-           'MRattleNoseHooverIntegrator', 'MRattleBussiIntegrator', 'StateDataReporter', 'degreesOfFreedom',
-           'kineticTemperature', 'removeIntraBodyInteractions', 'rigidBodies', 'declareRigidBodies', 'asPluginIntegrator', 'minimizeEnergy', 'RigidBodyMinimizer', 'models', 'baselines', 'PLUGIN_PATH',
-           'PLUGIN_PATHS', 'PLATFORMS', 'DEVICE_PLATFORMS']
+__all__ = ['RigidBodyIntegrator', 'INTEGRATOR_CLASSES'] + [_class.__name__ for _class in INTEGRATOR_CLASSES] + [
+    'StateDataReporter', 'degreesOfFreedom', 'kineticTemperature', 'removeIntraBodyInteractions', 'rigidBodies',
+    'declareRigidBodies', 'asPluginIntegrator', 'minimizeEnergy', 'RigidBodyMinimizer', 'models', 'baselines',
+    'PLUGIN_PATH', 'PLUGIN_PATHS', 'PLATFORMS', 'DEVICE_PLATFORMS']

@@ -2,7 +2,10 @@
 import openmm
 from openmm import app, unit
 
-from .integrators import RigidBodyIntegrator, RigidBodyTopology
+from .integrators import INTEGRATOR_CLASSES, RigidBodyIntegrator, RigidBodyTopology
+
+#: The plugin's integrator classes with a heat bath (computeHeatBathEnergy()), which the reporter's energy columns need.
+HEAT_BATH_INTEGRATORS = [cls for cls in INTEGRATOR_CLASSES if hasattr(cls, 'computeHeatBathEnergy')]
 
 
 def degreesOfFreedom(simulationOrContext):
@@ -70,8 +73,8 @@ class StateDataReporter(_TemperatureReporter):
     rotationalTemperature : bool=False
         write the bodies' rotational temperature (RigidBodyIntegrator.computeRotationalTemperature())
     heatBathEnergy : bool=False
-        write the thermostat's heat-bath energy (computeHeatBathEnergy() of MRattleNoseHooverIntegrator
-        or MRattleBussiIntegrator, or of OpenMM's NoseHooverIntegrator)
+        write the thermostat's heat-bath energy (computeHeatBathEnergy() of an integrator of
+        HEAT_BATH_INTEGRATORS, MRattleNoseHooverIntegrator say, or of OpenMM's NoseHooverIntegrator)
     conservedEnergy : bool=False
         write kinetic + potential + heat-bath energy, the quantity those thermostats conserve
 
@@ -108,8 +111,9 @@ class StateDataReporter(_TemperatureReporter):
                              % type(simulation.integrator).__name__)
         if 'computeHeatBathEnergy' in needs and not hasattr(simulation.integrator, 'computeHeatBathEnergy'):
             raise ValueError('StateDataReporter: the heatBathEnergy and conservedEnergy columns need an integrator with '
-                             'computeHeatBathEnergy() (mrattle.MRattleNoseHooverIntegrator, mrattle.MRattleBussiIntegrator); '
-                             'the Simulation has a %s' % type(simulation.integrator).__name__)
+                             'computeHeatBathEnergy() (%s); the Simulation has a %s'
+                             % (', '.join('mrattle.' + cls.__name__ for cls in HEAT_BATH_INTEGRATORS),
+                                type(simulation.integrator).__name__))
         super().report(simulation, state)
 
     # OpenMM's StateDataReporter has no public way to add columns: the two below extend the

@@ -5,7 +5,7 @@
  * type table (do not define SWIG_TYPE_TABLE) lets openmm.Context accept them, and the
  * inherited getStepSize()/setStepSize() handle units as for OpenMM's integrators.
  * To wrap another RigidBodyIntegrator subclass: one MRATTLE_INTEGRATOR line (below), after
- * the features of its own methods if it has any.
+ * the features of its own methods if it has any; the package 'mrattle' then exports it.
  */
 %module(package="mrattle", docstring="SWIG wrappers of the M-RATTLE plugin's integrators.") integrators
 
@@ -188,9 +188,15 @@ static std::vector<PluginIntegratorCast> pluginIntegratorCasts;
  * Wrap one concrete integrator class, declared in CLASS.h: its constructor takes the step
  * size as a Quantity of time or a number of picoseconds, as for openmm.VerletIntegrator
  * (a constructor with more arguments gets its own pythonprepend, with its signature, before
- * this line: that one is the more specific and wins), and _pluginIntegratorProxy knows it.
+ * this line: that one is the more specific and wins), _pluginIntegratorProxy knows it, and
+ * INTEGRATOR_CLASSES lists it (so the package exports it).
  */
 %typemap(doctype) double stepSize "float or Quantity (time)"
+%pythoncode %{
+#: Every integrator class wrapped here, in the order of their MRATTLE_INTEGRATOR lines (each
+#: line appends its class): the package imports and exports them from this list.
+INTEGRATOR_CLASSES = []
+%}
 %define MRATTLE_INTEGRATOR(CLASS)
 %{
 #include "CLASS.h"
@@ -207,6 +213,9 @@ static PyObject* pluginIntegratorAs##CLASS(OpenMM::Integrator* integrator) {
         stepSize = stepSize.value_in_unit(unit.picosecond)
 %}
 %include "CLASS.h"
+%pythoncode %{
+INTEGRATOR_CLASSES.append(CLASS)
+%}
 %enddef
 
 MRATTLE_INTEGRATOR(MRattleIntegrator)

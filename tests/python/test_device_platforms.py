@@ -10,6 +10,7 @@ import pytest
 from openmm import app, unit
 
 import mrattle
+from mrattle.reporters import HEAT_BATH_INTEGRATORS
 
 @pytest.mark.parametrize('precision', ['single', 'mixed', 'double'])
 def test_simulation_runs_on_the_device(devicePlatform, precision):
@@ -160,13 +161,13 @@ def test_langevin_temperature_past_reorderings(devicePlatform):
 
 
 @pytest.mark.parametrize('precision', ['single', 'mixed'])
-@pytest.mark.parametrize('kind', ['MRattleNoseHooverIntegrator', 'MRattleBussiIntegrator'])
-def test_thermostats_in_single_and_mixed_precision(devicePlatform, precision, kind):
+@pytest.mark.parametrize('cls', HEAT_BATH_INTEGRATORS, ids=lambda cls: cls.__name__)
+def test_thermostats_in_single_and_mixed_precision(devicePlatform, precision, cls):
     """The thermostats' device kernels in the precisions the C++ suite does not run (it runs
     double): a 64-water box started hot cools towards the bath, and the conserved quantity
     (kinetic + potential + heat bath) moves far less than the bath's energy."""
     model = mrattle.models.waterBox(numMolecules=64, cutoff=0.45*unit.nanometers)
-    integrator = getattr(mrattle, kind)(300*unit.kelvin, 20/unit.picosecond, 1*unit.femtoseconds)
+    integrator = cls(300*unit.kelvin, 20/unit.picosecond, 1*unit.femtoseconds)
     context = openmm.Context(model.system, integrator, devicePlatform, {'Precision': precision})
     context.setPositions(model.positions)
     context.setVelocitiesToTemperature(450*unit.kelvin, 2)

@@ -32,6 +32,23 @@ def test_is_an_openmm_integrator():
         mrattle.RigidBodyIntegrator()  # abstract
 
 
+def test_package_exports_every_wrapped_integrator_class():
+    """Each MRATTLE_INTEGRATOR line registers its class (INTEGRATOR_CLASSES), and the package
+    exports exactly the registered classes, by name and through 'from mrattle import *'."""
+    wrapped = [cls for cls in vars(mrattle.integrators).values()
+               if isinstance(cls, type) and issubclass(cls, mrattle.RigidBodyIntegrator)
+               and cls is not mrattle.RigidBodyIntegrator]
+    assert 'MRattleIntegrator' in [cls.__name__ for cls in wrapped]
+    assert sorted(mrattle.INTEGRATOR_CLASSES, key=lambda cls: cls.__name__) == sorted(wrapped, key=lambda cls: cls.__name__)
+    exported = {}
+    exec('from mrattle import *', exported)
+    for cls in wrapped:
+        assert getattr(mrattle, cls.__name__) is cls
+        assert exported[cls.__name__] is cls
+    # The reporter's energy columns and the thermostat tests take theirs from the registry.
+    assert mrattle.reporters.HEAT_BATH_INTEGRATORS, 'no registered integrator has computeHeatBathEnergy()'
+
+
 @pytest.mark.parametrize('cls', [mrattle.MRattleIntegrator, mrattle.RigidSplittingIntegrator])
 def test_step_size_units(cls):
     fromQuantity = cls(2*unit.femtoseconds)

@@ -10,6 +10,7 @@ from openmm import app, unit
 
 import mrattle
 from conftest import platformProperties
+from mrattle.reporters import HEAT_BATH_INTEGRATORS
 
 
 def test_units_and_numpy_values():
@@ -34,10 +35,10 @@ def test_units_and_numpy_values():
         bussi.computeHeatBathEnergy()
 
 
-@pytest.mark.parametrize('kind', ['MRattleNoseHooverIntegrator', 'MRattleBussiIntegrator'])
-def test_reporter_writes_a_flat_conserved_energy(platform, kind):
+@pytest.mark.parametrize('cls', HEAT_BATH_INTEGRATORS, ids=lambda cls: cls.__name__)
+def test_reporter_writes_a_flat_conserved_energy(platform, cls):
     model = mrattle.models.waterBox(numMolecules=64, cutoff=0.45*unit.nanometers)
-    integrator = getattr(mrattle, kind)(300*unit.kelvin, 10/unit.picosecond, 1*unit.femtoseconds)
+    integrator = cls(300*unit.kelvin, 10/unit.picosecond, 1*unit.femtoseconds)
     simulation = app.Simulation(model.topology, model.system, integrator, platform, platformProperties(platform))
     simulation.context.setPositions(model.positions)
     simulation.context.setVelocitiesToTemperature(400*unit.kelvin, 1)  # hot: the bath takes energy out
@@ -63,12 +64,12 @@ def test_reporter_writes_a_flat_conserved_energy(platform, kind):
         other.step(1)
 
 
-@pytest.mark.parametrize('kind', ['MRattleNoseHooverIntegrator', 'MRattleBussiIntegrator'])
-def test_serialization_and_checkpoint(platform, kind, tmp_path):
+@pytest.mark.parametrize('cls', HEAT_BATH_INTEGRATORS, ids=lambda cls: cls.__name__)
+def test_serialization_and_checkpoint(platform, cls, tmp_path):
     model = mrattle.models.waterBox(numMolecules=64, cutoff=0.45*unit.nanometers)
-    integrator = getattr(mrattle, kind)(300*unit.kelvin, 10/unit.picosecond, 2*unit.femtoseconds)
+    integrator = cls(300*unit.kelvin, 10/unit.picosecond, 2*unit.femtoseconds)
     copy = openmm.XmlSerializer.deserialize(openmm.XmlSerializer.serialize(integrator))
-    assert isinstance(copy, getattr(mrattle, kind))
+    assert isinstance(copy, cls)
     assert copy.getCollisionFrequency() == 10/unit.picosecond
     simulation = app.Simulation(model.topology, model.system, integrator, platform, platformProperties(platform))
     simulation.context.setPositions(model.positions)
