@@ -205,7 +205,7 @@ CSV_COLUMNS = ['model', 'method', 'step_fs', 'Ttrans', 'Ttrans_se', 'Trot', 'Tro
 
 def csv_row(r):
     ok = r['failure'] is None
-    return [r['model'], r['method'], r['step_fs']] + \
+    return [r['model'], r['method'], '%g' % r['step_fs']] + \
         ([r['Ttrans'][0], r['Ttrans'][1], r['Trot'][0], r['Trot'][1], r['difference'][0], r['difference'][1],
           r['drift']] if ok else [''] * 7) + [r['failure'] or '', r['steps'], '%.0f' % r['wall_s']]
 
