@@ -8,7 +8,7 @@ energy at smaller steps; the density under a barostat), writing <out>_<study>.cs
 equipartition, the thermostats' rows of the equipartition table (suite/equipartition.py), merged
 into <out's folder>/equipartition.csv and its report (--splice puts it into results.md).
 Usage: scripts/python.sh benchmarks/python/thermostat_validation.py [--quick] [--out docs/results/thermostats]
-       scripts/python.sh benchmarks/python/thermostat_validation.py --study step-sizes [--steps 1,0.5] [--ps 20]
+       scripts/python.sh benchmarks/python/thermostat_validation.py --study step-sizes [--steps 1,0.5] [--ps 20] [--methods ...]
        scripts/python.sh benchmarks/python/thermostat_validation.py --study density [--ps 40]
        scripts/python.sh benchmarks/python/thermostat_validation.py --study equipartition [--splice docs/results.md]
        scripts/python.sh benchmarks/python/thermostat_validation.py --report-from docs/results/thermostats.csv ...
@@ -35,11 +35,15 @@ def main():
     parser.add_argument('--study', choices=('step-sizes', 'density', 'equipartition'), help='run a follow-up study instead')
     parser.add_argument('--ps', type=float, help='with --study: the production length of each run (ps)')
     parser.add_argument('--threads', type=int, default=1, help='CPU platform threads')
+    parser.add_argument('--methods', help='with --study step-sizes: comma-separated methods (default: the thermostats '
+                        'and LangevinMiddle + SETTLE; "M-RATTLE Langevin" may be added)')
     args = parser.parse_args()
     began = time.time()
     steps = [float(x) for x in args.steps.split(',')] if args.steps else None
     extra = {'ps': args.ps} if args.ps else {}
     if args.study == 'step-sizes':
+        if args.methods:
+            extra['methods'] = tuple(args.methods.split(','))
         thermostats.run_step_sizes(args.quick, args.out + '_step_sizes', log, args.threads,
                                    steps or thermostats.STEP_SIZE_FS, **extra)
     elif args.study == 'density':

@@ -47,6 +47,8 @@ def make_integrator(method, step_fs):
         integrator = openmm.LangevinMiddleIntegrator(TEMPERATURE, 1.0, step)
         integrator.setRandomNumberSeed(5)
         return integrator
+    if method == M_RATTLE_LANGEVIN:
+        return equipartition.make_integrator(method, step_fs)
     raise ValueError(method)
 
 
@@ -165,19 +167,23 @@ def run(quick, out, log, threads=1, methods=METHODS, steps=None):
 
 
 STEP_SIZE_METHODS = METHODS[1:]  # the sampling ones
+# MRattleLangevinIntegrator (1/ps): LangevinMiddle's splitting with M-RATTLE, to tell the splitting's share of a
+# difference from M-RATTLE's (only when asked for).
+M_RATTLE_LANGEVIN = 'M-RATTLE Langevin'
 STEP_SIZE_FS = (1, 0.5)  # 2 fs: the main run's production rows
 
 
-def run_step_sizes(quick, out, log, threads=1, steps=STEP_SIZE_FS, ps=20.0):
+def run_step_sizes(quick, out, log, threads=1, steps=STEP_SIZE_FS, ps=20.0, methods=STEP_SIZE_METHODS):
     """The potential energy's step-size dependence (NVT): each thermostat and LangevinMiddle + SETTLE at
     `steps` for `ps` each, from the main run's start, with the 2-fs runs' figures (out + '.csv'). LangevinMiddle
     is run at 1 fs and up only (its configurational sampling is the reference)."""
+    assert set(methods) <= set(STEP_SIZE_METHODS + (M_RATTLE_LANGEVIN,)), methods
     ps, equilibrate_ps = (0.2, 0.05) if quick else (ps, 2.0)
     system, positions, bodies = water()
     start = equipartition.equilibrate(system, positions, equilibrate_ps, threads)
     rows = []
     for step_fs in steps:
-        for method in STEP_SIZE_METHODS:
+        for method in methods:
             if method == 'LangevinMiddle + SETTLE' and step_fs < 1:
                 continue
             rows.append(run_one(method, step_fs, ps, start, system, bodies, threads, production=True))
@@ -234,7 +240,7 @@ def run_one(method, step_fs, ps, start, system, bodies, threads, production=None
     except Exception as error:  # a blow-up is a result
         return dict(method=method, step_fs=step_fs, ps=ps, failure=str(error).splitlines()[0])
     row = dict(method=method, step_fs=step_fs, ps=ps, wall_s=round(wall))
-    if method != 'LangevinMiddle + SETTLE':  # it conserves nothing
+    if method not in ('LangevinMiddle + SETTLE', M_RATTLE_LANGEVIN):  # they conserve nothing
         drift, drift_se = drift_with_error(series['time'], series['conserved'])
         row['drift_kJ_per_mol_ns_per_molecule'], row['drift_se'] = drift / len(bodies), drift_se / len(bodies)
     for key in ('Ttrans', 'Trot'):
@@ -340,7 +346,7 @@ def report_step_sizes(rows, dof, kT):
           'LangevinMiddle + SETTLE\'s at %g fs, +- the two standard errors combined (in those errors).\n'
           % reference['step_fs'],
           '| Method | Step (fs) | Run (ps) | T (K) | U per water (kJ/mol) | U - reference (kJ/mol) |', '|---|---|---|---|---|---|']
-    order = {m: k for k, m in enumerate(STEP_SIZE_METHODS)}
+    order = {m: k for k, m in enumerate(STEP_SIZE_METHODS + (M_RATTLE_LANGEVIN,))}
     for r in sorted(rows, key=lambda r: (order[r['method']], -r['step_fs'])):
         if r.get('failure'):
             md.append('| %s | %g | %g | failed: %s | | |' % (r['method'], r['step_fs'], r['ps'], r['failure']))
