@@ -58,3 +58,11 @@ def test_density_table_differences():
                for line in md)
     assert any(line.startswith('| M-RATTLE CSVR | failed: energy not finite') for line in md)
     assert thermostats.combined(rows[0], rows[1], 'density', 'density_se') == pytest.approx((0.004, 0.005, 0.8))
+
+
+def test_step_squared_fit_recovers_a_known_line():
+    points = [dict(step_fs=h, potential_per_molecule=-40.0 + 0.01 * h * h, potential_per_molecule_se=0.02)
+              for h in (0.5, 1, 2)]
+    (u0, u0_se), (c, c_se), chi2, dof = thermostats.fit_step_squared(points)
+    assert (u0, c, chi2, dof) == (pytest.approx(-40.0), pytest.approx(0.01), pytest.approx(0, abs=1e-12), 1)
+    assert 0 < u0_se < 0.02 and 0 < c_se < 0.02

@@ -356,7 +356,30 @@ def report_step_sizes(rows, dof, kT):
             r['method'], r['step_fs'], r['ps'], 2 * r['kinetic_mean'] / (dof * langevin.KB),
             2 * r['kinetic_mean_se'] / (dof * langevin.KB), r['potential_per_molecule'], r['potential_per_molecule_se'],
             '(reference)' if r is reference else '%+.3f +- %.3f (%+.1f)' % (d, e, z)))
+    fits = []
+    for method in sorted({r['method'] for r in rows}, key=order.get):
+        points = [r for r in rows if r['method'] == method and 'potential_per_molecule' in r]
+        if len({r['step_fs'] for r in points}) >= 2:
+            (u0, u0_se), (c, c_se), chi2, dof_fit = fit_step_squared(points)
+            fits.append('%s: U(0) = %.3f +- %.3f, c = %+.4f +- %.4f kJ/mol/fs^2 (%+.1f SE; chi^2 %.1f for %d)' % (
+                method, u0, u0_se, c, c_se, c / c_se, chi2, dof_fit))
+    if fits:
+        md.append('\nWeighted least-squares fits U per water = U(0) + c h^2 (h in fs; the errors from the fit\'s '
+                  'covariance, not rescaled by chi^2): ' + '; '.join(fits) + '.')
     return md
+
+
+def fit_step_squared(points):
+    """U = U0 + c h^2 by weighted least squares: (U0, SE), (c, SE), chi^2 and its degrees of freedom."""
+    h2 = np.array([r['step_fs'] ** 2 for r in points])
+    u = np.array([r['potential_per_molecule'] for r in points])
+    w = 1 / np.array([r['potential_per_molecule_se'] for r in points]) ** 2
+    design = np.column_stack([np.ones_like(h2), h2])
+    covariance = np.linalg.inv(design.T @ (w[:, None] * design))
+    coefficients = covariance @ design.T @ (w * u)
+    chi2 = float(np.sum(w * (u - design @ coefficients) ** 2))
+    errors = np.sqrt(np.diag(covariance))
+    return (coefficients[0], errors[0]), (coefficients[1], errors[1]), chi2, len(points) - 2
 
 
 def report_density(rows):
