@@ -36,15 +36,17 @@ def sampled(method, step_fs, potential, se=0.03):
                 potential_per_molecule_se=se, kinetic_mean=0.5 * 5367 * kT, kinetic_mean_se=1.0)
 
 
-def test_step_size_table_is_against_langevin_middle_at_its_smallest_step():
-    rows = [sampled('M-RATTLE CSVR', 2, -40.0), sampled('LangevinMiddle + SETTLE', 2, -40.1),
-            sampled('LangevinMiddle + SETTLE', 1, -40.2, 0.04)]
+def test_step_size_table_is_against_langevin_middle_pooled_over_its_steps():
+    rows = [sampled('M-RATTLE CSVR', 2, -40.0), sampled('M-RATTLE Nose-Hoover chain', 2, -40.0),
+            sampled('LangevinMiddle + SETTLE', 2, -40.1), sampled('LangevinMiddle + SETTLE', 1, -40.3)]
     md = thermostats.report_step_sizes(rows, 5367, 0.0)
-    assert 'LangevinMiddle + SETTLE\'s at 1 fs' in md[1]
+    assert '-40.200 +- 0.021 kJ/mol' in md[1]  # (-40.1 - 40.3) / 2, 0.03 / sqrt(2)
     csvr = [line for line in md if line.startswith('| M-RATTLE CSVR | 2 |')][0]
     assert '| 300.0 +- 0.0 |' in csvr
-    assert csvr.endswith('| +0.200 +- 0.050 (+4.0) |')
-    assert [line for line in md if line.startswith('| LangevinMiddle + SETTLE | 1 |')][0].endswith('(reference) |')
+    assert csvr.endswith('| +0.200 +- 0.037 (+5.4) |')
+    assert any(line.startswith('\nThe two thermostats pooled at each step') and '2 fs +0.200 +- 0.030 (+6.7 SE)' in line
+               for line in md)
+    assert thermostats.pooled(rows[:2]) == pytest.approx((-40.0, 0.03 / math.sqrt(2)))
 
 
 def test_density_table_differences():
