@@ -12,6 +12,12 @@ From one start (LangevinMiddle + SETTLE at 300 K), each method runs at 300 K:
    energy) and the translational and rotational temperatures (on-step velocities).
 Means carry standard errors from 10 block averages; a variance's error comes from the block
 variances. The suite's part `thermostats`; alone: benchmarks/python/thermostat_validation.py.
+
+Follow-up studies (run by thermostat_validation.py --study, reported in the same section when their CSVs
+lie beside the main one): the potential energy per water at smaller steps beside LangevinMiddle + SETTLE
+(run_step_sizes: is the 2-fs difference a step-size error?), and the density under a MonteCarloBarostat
+(run_density). The translational and rotational temperatures against the step are in the equipartition
+table (suite/equipartition.py runs the two thermostats for TIP3P).
 """
 import csv
 import math
@@ -31,6 +37,7 @@ FREQUENCY = 10.0  # 1/ps, both thermostats
 METHODS = ('M-RATTLE NVE', 'M-RATTLE Nose-Hoover chain', 'M-RATTLE CSVR', 'LangevinMiddle + SETTLE')
 BLOCKS = 10
 DALTON_GRAMS = 1.66053906660e-24
+SAMPLE_FS = 10.0  # between samples of every run
 
 
 def make_integrator(method, step_fs):
@@ -80,7 +87,7 @@ def diffusion(times, oxygens, segments=4):
     return np.mean(values), np.std(values, ddof=1) / math.sqrt(segments)
 
 
-def run_series(method, step_fs, ps, start, system, bodies, threads, sample_fs=10.0, keep_oxygens=False):
+def run_series(method, step_fs, ps, start, system, bodies, threads, sample_fs=SAMPLE_FS, keep_oxygens=False):
     """One run's series (every sample_fs): time, kinetic, potential, conserved energy, T_trans, T_rot, density;
     oxygen positions."""
     integrator = make_integrator(method, step_fs)
@@ -194,8 +201,6 @@ def run_step_sizes(quick, out, log, threads=1, steps=STEP_SIZE_FS, ps=20.0, meth
 
 DENSITY_COLUMNS = ['method', 'step_fs', 'ps', 'discarded_ps', 'density', 'density_se', 'potential_per_molecule',
                    'potential_per_molecule_se', 'T', 'T_se', 'failure', 'wall_s']
-
-
 DENSITY_EQUILIBRATE_PS = 10.0
 
 
@@ -218,7 +223,7 @@ def run_density(quick, out, log, threads=1, ps=40.0, discard_ps=4.0, equilibrate
         except Exception as error:  # a blow-up is a result
             row['failure'] = str(error).splitlines()[0]
         else:
-            kept = len(series['time']) - int(round(ps / 0.01))
+            kept = len(series['time']) - int(round(ps * 1000 / SAMPLE_FS))
             row['density'], row['density_se'] = langevin.block_mean(series['density'][kept:], BLOCKS)
             u, u_se = langevin.block_mean(series['potential'][kept:], BLOCKS)
             row['potential_per_molecule'], row['potential_per_molecule_se'] = u / len(bodies), u_se / len(bodies)
