@@ -2,8 +2,9 @@
 
 NVE runs of OpenMM's rigid TIP3P box (app/data/tip3p.pdb) and rigid SPC/E box (app/data/spce.pdb),
 from one equilibrated start per model (LangevinMiddle + SETTLE at 300 K), with MRattleIntegrator
-beside VerletIntegrator with SETTLE at 0.5, 1, 2, 3 and 4 fs, and MRattleLangevinIntegrator at 2 and
-4 fs. The translational and rotational temperatures of every run come from the same formula
+beside VerletIntegrator with SETTLE at 0.5, 1, 2, 3 and 4 fs, MRattleLangevinIntegrator at 2 and
+4 fs, and (TIP3P) the thermostats of issue 33, MRattleNoseHooverIntegrator and MRattleBussiIntegrator
+(suite/thermostats.py's settings), at 0.5 to 5 fs. The translational and rotational temperatures of every run come from the same formula
 (rigid_split: 1/2 M V^2 per molecule, the rest of its kinetic energy rotational, the
 CMMotionRemover's 3 degrees of freedom taken from the translations), on the on-step velocities of
 each integrator (for OpenMM's leapfrog VerletIntegrator rebuilt from its half-step ones), means and
@@ -11,6 +12,8 @@ standard errors from block averages. Asthagiri & Beck (2024) found that NVE rigi
 at 0.5 fs, with the rotational temperature below the translational at 1-3 fs.
 
     /usr/bin/python3 benchmarks/python/run_suite.py --only equipartition   # or ./benchmarks/run.sh --only equipartition
+    # the thermostats' rows alone, merged into docs/results/equipartition.csv and its section:
+    scripts/python.sh benchmarks/python/thermostat_validation.py --study equipartition --splice docs/results.md
 """
 import csv
 import math
@@ -31,6 +34,9 @@ MODELS = (('TIP3P', 'tip3p.pdb', 'amber14/tip3p.xml'), ('SPC/E', 'spce.pdb', 'am
 NVE_STEPS_FS = (0.5, 1, 2, 3, 4)
 LANGEVIN_STEPS_FS = (2, 4)
 METHODS = ('M-RATTLE', 'Verlet + SETTLE')
+THERMOSTATS = ('M-RATTLE Nose-Hoover chain', 'M-RATTLE CSVR')  # thermostats.METHODS' names
+THERMOSTAT_STEPS_FS = (0.5, 1, 2, 3, 4, 5)
+THERMOSTAT_MODELS = ('TIP3P',)  # issue 33's validation system
 TEMPERATURE = 300.0
 BLOCKS = 10
 
@@ -49,7 +55,8 @@ def cpu(threads):
 
 
 def equilibrate(system, positions, ps, threads, seed=11):
-    """LangevinMiddle + SETTLE at 300 K, 1/ps, 2 fs: the start of every run of this model."""
+    """LangevinMiddle + SETTLE at 300 K, 1/ps, 2 fs: the start of every run of this model. Under a
+    barostat the System's default box becomes the one reached, so that runs start in it."""
     integrator = openmm.LangevinMiddleIntegrator(TEMPERATURE * unit.kelvin, 1 / unit.picosecond, 2 * unit.femtoseconds)
     integrator.setRandomNumberSeed(seed)
     context = openmm.Context(system, integrator, *cpu(threads))
@@ -57,6 +64,7 @@ def equilibrate(system, positions, ps, threads, seed=11):
     context.setVelocitiesToTemperature(TEMPERATURE * unit.kelvin, seed)
     integrator.step(int(round(ps / 0.002)))
     state = context.getState(getPositions=True, getVelocities=True)
+    system.setDefaultPeriodicBoxVectors(*state.getPeriodicBoxVectors())
     return state.getPositions(asNumpy=True), state.getVelocities(asNumpy=True)
 
 
@@ -70,6 +78,9 @@ def make_integrator(method, step_fs):
         return integrator
     if method == 'Verlet + SETTLE':
         return openmm.VerletIntegrator(step)
+    if method in THERMOSTATS:
+        from . import thermostats  # here: thermostats imports this module
+        return thermostats.make_integrator(method, step_fs)
     raise ValueError('unknown method %r' % method)
 
 
@@ -86,6 +97,10 @@ def against_published(result):
 
 
 HALF_STEP = 'Verlet + SETTLE, State velocities (half step)'
+# ps equilibrated, ps dropped, ps sampled, fs between samples: sized for a shared 2-core machine
+# (a PME step of the 2685-atom box took 0.016-0.17 s there).
+LENGTHS = (2.0, 0.3, 2.5, 10)
+MOLECULES = 895  # waters in each of OpenMM's tip3p.pdb and spce.pdb (for reporting kept rows)
 
 
 def rigid_split(velocities, positions, masses, bodies, project=True):
@@ -122,7 +137,7 @@ def summarize(model, method, step_fs, trans, rot, times, energy, failure, wall, 
 
 def run_one(model, system, bodies, start, method, step_fs, discard_ps, production_ps, sample_fs, threads):
     """One run: translational and rotational temperature and their difference (mean, SE), energy
-    drift. VerletIntegrator is leapfrog: its State velocities are half a step behind; its on-step
+    drift (a thermostat's: of the energy plus its heat bath's, the quantity it conserves). VerletIntegrator is leapfrog: its State velocities are half a step behind; its on-step
     velocities are v + (h/2) f/m made rigid (velocity Verlet's, i.e. RATTLE's), and a second
     result gives the State velocities as they are."""
     integrator = make_integrator(method, step_fs)
@@ -133,6 +148,7 @@ def run_one(model, system, bodies, start, method, step_fs, discard_ps, productio
     removes_cm = any(isinstance(f, openmm.CMMotionRemover) for f in system.getForces())
     dof_trans, dof_rot = 3 * len(bodies) - (3 if removes_cm else 0), 3 * len(bodies)
     leapfrog = method == 'Verlet + SETTLE'
+    bath = getattr(integrator, 'computeHeatBathEnergy', lambda: 0 * unit.kilojoule_per_mole)
     stride = max(1, int(round(sample_fs / step_fs)))
     samples = int(round(production_ps * 1000 / (stride * step_fs)))
     h = step_fs * 0.001
@@ -156,7 +172,7 @@ def run_one(model, system, bodies, start, method, step_fs, discard_ps, productio
             series['trans'].append(2 * kt / (dof_trans * langevin.KB))
             series['rot'].append(2 * kr / (dof_rot * langevin.KB))
             series['time'].append(state.getTime().value_in_unit(unit.picosecond))
-            series['energy'].append((state.getKineticEnergy() + state.getPotentialEnergy()).value_in_unit(
+            series['energy'].append((state.getKineticEnergy() + state.getPotentialEnergy() + bath()).value_in_unit(
                 unit.kilojoule_per_mole))
             if not math.isfinite(series['energy'][-1] + kt + kr):
                 raise ArithmeticError('energy not finite at %.2f ps' % series['time'][-1])
@@ -189,14 +205,25 @@ CSV_COLUMNS = ['model', 'method', 'step_fs', 'Ttrans', 'Ttrans_se', 'Trot', 'Tro
 
 def csv_row(r):
     ok = r['failure'] is None
-    return [r['model'], r['method'], r['step_fs']] + \
+    return [r['model'], r['method'], '%g' % r['step_fs']] + \
         ([r['Ttrans'][0], r['Ttrans'][1], r['Trot'][0], r['Trot'][1], r['difference'][0], r['difference'][1],
           r['drift']] if ok else [''] * 7) + [r['failure'] or '', r['steps'], '%.0f' % r['wall_s']]
 
 
+def model_runs(name, methods=None):
+    """(method, step) of every run of a model, the large steps first (cheapest, and where the published
+    bias is); only `methods` if given."""
+    runs = [(method, step) for step in (3, 4, 2) for method in METHODS]
+    runs += [('M-RATTLE Langevin', step) for step in LANGEVIN_STEPS_FS]
+    runs += [(method, step) for step in (1, 0.5) for method in METHODS]
+    if name in THERMOSTAT_MODELS:
+        runs += [(method, step) for method in THERMOSTATS for step in THERMOSTAT_STEPS_FS]
+    return [run for run in runs if methods is None or run[0] in methods]
+
+
 def run_model(task):
     """All runs of one model (in a process of its own), each appended to a partial CSV as it ends."""
-    name, pdb_name, forcefield_name, lengths, threads, partial = task
+    name, pdb_name, forcefield_name, lengths, threads, partial, methods = task
     equilibrate_ps, discard_ps, production_ps, sample_fs = lengths
     began = time.time()
 
@@ -206,10 +233,7 @@ def run_model(task):
     system, positions, bodies = water(pdb_name, forcefield_name)
     start = equilibrate(system, positions, equilibrate_ps, threads)
     log('%s, %d waters, equilibrated %.1f ps' % (name, len(bodies), equilibrate_ps))
-    # The large steps first: cheapest, and where the published bias is.
-    runs = [(method, step) for step in (3, 4, 2) for method in METHODS]
-    runs += [('M-RATTLE Langevin', step) for step in LANGEVIN_STEPS_FS]
-    runs += [(method, step) for step in (1, 0.5) for method in METHODS]
+    runs = model_runs(name, methods)
     rows = []
     with open(partial, 'w', newline='') as stream:
         csv.writer(stream).writerow(CSV_COLUMNS)
@@ -224,45 +248,49 @@ def run_model(task):
     return len(bodies), rows
 
 
-def run(quick, out, log, threads=1):
+def run(quick, out, log, threads=1, methods=None):
     """Run every model and step size, the two models in two processes of one CPU thread each (on a
     shared machine two single-thread processes lose less to waiting than one of two threads);
     write out + '.csv'; return the report as markdown lines. Each model's runs are also appended
     to out + '.partial-<model>.csv' as they end (removed at the end), so a run cut short keeps
-    what it has."""
-    if quick:
-        lengths = (0.02, 0.01, 0.04, 4)
-    else:
-        # Sized for a shared 2-core machine (a PME step of the 2685-atom box took 0.016-0.17 s there).
-        lengths = (2.0, 0.3, 2.5, 10)
+    what it has. With `methods`, only their runs (of the models that have them) are made, and they
+    replace their own rows in an existing out + '.csv', whose other rows are kept and reported."""
+    lengths = (0.02, 0.01, 0.04, 4) if quick else LENGTHS
     os.makedirs(os.path.dirname(os.path.abspath(out)), exist_ok=True)
     tasks = [(name, pdb_name, forcefield_name, lengths, threads,
-              '%s.partial-%s.csv' % (out, name.replace('/', '')))
-             for name, pdb_name, forcefield_name in MODELS]
+              '%s.partial-%s.csv' % (out, name.replace('/', '')), methods)
+             for name, pdb_name, forcefield_name in MODELS if model_runs(name, methods)]
     began = time.time()
     with multiprocessing.get_context('spawn').Pool(len(tasks)) as pool:
         results = pool.map(run_model, tasks)
     log('equipartition: both models in %.0f s' % (time.time() - began))
     by_model = {task[0]: result[0] for task, result in zip(tasks, results)}
     rows = [row for result in results for row in result[1]]
+    if methods is not None and os.path.exists(out + '.csv'):
+        made = {(r['model'], r['method'], r['step_fs']) for r in rows}
+        kept = [r for r in rows_from_csv(out + '.csv') if (r['model'], r['method'], r['step_fs']) not in made]
+        rows = kept + rows
+        by_model.update({r['model']: by_model.get(r['model'], MOLECULES) for r in kept})
     with open(out + '.csv', 'w', newline='') as stream:
         writer = csv.writer(stream)
         writer.writerow(CSV_COLUMNS)
         for row in rows:
             writer.writerow(csv_row(row))
     for task in tasks:
-        os.remove(task[-1])
+        os.remove(task[-2])  # its partial CSV
     return report(rows, by_model, quick, *lengths, threads)
 
 
 def report(rows, by_model, quick, equilibrate_ps, discard_ps, production_ps, sample_fs, threads):
-    md = ['\n## Equipartition of rigid water against step size (NVE)\n',
+    md = ['\n## Equipartition of rigid water against step size\n',
           'OpenMM\'s `app/data/tip3p.pdb` (%d waters, `amber14/tip3p.xml`) and `app/data/spce.pdb` (%d waters, '
           '`amber14/spce.xml`), PME (0.9 nm), CPU platform with %d thread(s) (the two models in two processes), '
           'each water set to its model\'s exact '
           'geometry. Every run starts from the same state per model: %s ps of LangevinMiddle + SETTLE at 300 K '
           '(1/ps, 2 fs). NVE runs then drop %s ps and sample the velocities every %s fs for %s ps; '
-          '`MRattleLangevinIntegrator` (300 K, 1/ps, its half-step velocities) is run the same way. '
+          '`MRattleLangevinIntegrator` (300 K, 1/ps, its half-step velocities) is run the same way, and for TIP3P '
+          'the thermostats of issue 33, `MRattleNoseHooverIntegrator` and `MRattleBussiIntegrator` (300 K, 10/ps, '
+          'settings as in the thermostats\' section), on their on-step velocities. '
           'Translational temperature: 1/2 M V^2 of each water over 3 per water minus the CMMotionRemover\'s 3; '
           'rotational: the rest of the kinetic energy over 3 per water; the same formula for every integrator, '
           'on its on-step velocities: OpenMM\'s `VerletIntegrator` is leapfrog, so its State velocities (half a '
@@ -271,14 +299,14 @@ def report(rows, by_model, quick, equilibrate_ps, discard_ps, production_ps, sam
           '(`benchmarks/python/suite/equipartition.py`, checked against `MRattleIntegrator`\'s own '
           '`computeTranslationalTemperature()` in `tests/python/test_kinetic_split.py`). Means +- standard '
           'errors from %d block averages; the difference T_rot - T_trans is block-averaged as one series '
-          '(the two temperatures are anticorrelated in NVE). Drift: slope of the total energy, kJ/mol/ns per '
-          'water.%s\n' % (by_model.get('TIP3P', 0), by_model.get('SPC/E', 0), threads, equilibrate_ps, discard_ps,
+          '(the two temperatures are anticorrelated in NVE). Drift: slope of the total energy (the thermostats: plus '
+          '`computeHeatBathEnergy()`, the quantity they conserve), kJ/mol/ns per water.%s\n' % (by_model.get('TIP3P', 0), by_model.get('SPC/E', 0), threads, equilibrate_ps, discard_ps,
                           sample_fs, production_ps, BLOCKS,
                           ' **Quick smoke run: too short to conclude anything.**' if quick else '')]
     md.append('| Model | Step (fs) | Integrator | T_trans (K) | T_rot (K) | T_rot - T_trans (K) | Drift | What the error bars support |')
     md.append('|---|---|---|---|---|---|---|---|')
     order = {name: k for k, (name, _, _) in enumerate(MODELS)}
-    ranks = {method: k for k, method in enumerate(METHODS + (HALF_STEP, 'M-RATTLE Langevin'))}
+    ranks = {method: k for k, method in enumerate(METHODS + (HALF_STEP, 'M-RATTLE Langevin') + THERMOSTATS)}
     rows = sorted(rows, key=lambda r: (order[r['model']], r['step_fs'], ranks[r['method']]))
     for r in rows:
         if r['failure'] is not None:

@@ -12,6 +12,12 @@ From one start (LangevinMiddle + SETTLE at 300 K), each method runs at 300 K:
    energy) and the translational and rotational temperatures (on-step velocities).
 Means carry standard errors from 10 block averages; a variance's error comes from the block
 variances. The suite's part `thermostats`; alone: benchmarks/python/thermostat_validation.py.
+
+Follow-up studies (run by thermostat_validation.py --study, reported in the same section when their CSVs
+lie beside the main one): the potential energy per water at smaller steps beside LangevinMiddle + SETTLE
+(run_step_sizes: is the 2-fs difference a step-size error?), and the density under a MonteCarloBarostat
+(run_density). The translational and rotational temperatures against the step are in the equipartition
+table (suite/equipartition.py runs the two thermostats for TIP3P).
 """
 import csv
 import math
@@ -23,13 +29,15 @@ from openmm import unit
 
 import mrattle
 
-from . import langevin
+from . import equipartition, langevin
 from .stats import drift_with_error
 
 TEMPERATURE = 300.0
 FREQUENCY = 10.0  # 1/ps, both thermostats
 METHODS = ('M-RATTLE NVE', 'M-RATTLE Nose-Hoover chain', 'M-RATTLE CSVR', 'LangevinMiddle + SETTLE')
 BLOCKS = 10
+DALTON_GRAMS = 1.66053906660e-24
+SAMPLE_FS = 10.0  # between samples of every run
 
 
 def make_integrator(method, step_fs):
@@ -46,6 +54,8 @@ def make_integrator(method, step_fs):
         integrator = openmm.LangevinMiddleIntegrator(TEMPERATURE, 1.0, step)
         integrator.setRandomNumberSeed(5)
         return integrator
+    if method == M_RATTLE_LANGEVIN:
+        return equipartition.make_integrator(method, step_fs)
     raise ValueError(method)
 
 
@@ -77,8 +87,9 @@ def diffusion(times, oxygens, segments=4):
     return np.mean(values), np.std(values, ddof=1) / math.sqrt(segments)
 
 
-def run_series(method, step_fs, ps, start, system, bodies, threads, sample_fs=10.0, keep_oxygens=False):
-    """One run's series (every sample_fs): time, kinetic, potential, conserved energy, T_trans, T_rot; oxygen positions."""
+def run_series(method, step_fs, ps, start, system, bodies, threads, sample_fs=SAMPLE_FS, keep_oxygens=False):
+    """One run's series (every sample_fs): time, kinetic, potential, conserved energy, T_trans, T_rot, density;
+    oxygen positions."""
     integrator = make_integrator(method, step_fs)
     context = openmm.Context(system, integrator, *platform(threads))
     context.setPositions(start[0])
@@ -88,7 +99,8 @@ def run_series(method, step_fs, ps, start, system, bodies, threads, sample_fs=10
     masses = np.array([system.getParticleMass(i).value_in_unit(unit.dalton) for i in range(system.getNumParticles())])
     oxygen = [body[0] for body in bodies]
     stride = max(1, int(round(sample_fs / step_fs)))
-    series = {key: [] for key in ('time', 'kinetic', 'potential', 'conserved', 'Ttrans', 'Trot')}
+    series = {key: [] for key in ('time', 'kinetic', 'potential', 'conserved', 'Ttrans', 'Trot', 'density')}
+    grams = masses.sum() * DALTON_GRAMS
     oxygens = []
     began = time.time()
     for _ in range(int(round(ps * 1000 / (stride * step_fs)))):
@@ -100,6 +112,8 @@ def run_series(method, step_fs, ps, start, system, bodies, threads, sample_fs=10
         series['kinetic'].append(kinetic)
         series['potential'].append(potential)
         series['conserved'].append(kinetic + potential + (bath().value_in_unit(unit.kilojoule_per_mole) if bath else 0))
+        a, b, c = state.getPeriodicBoxVectors(asNumpy=True).value_in_unit(unit.nanometer)
+        series['density'].append(grams / (a[0] * b[1] * c[2] * 1e-21))  # g/mL; the box is rectangular
         if rigid:
             series['Ttrans'].append(integrator.computeTranslationalTemperature().value_in_unit(unit.kelvin))
             series['Trot'].append(integrator.computeRotationalTemperature().value_in_unit(unit.kelvin))
@@ -121,25 +135,31 @@ CSV_COLUMNS = ['method', 'step_fs', 'ps', 'kinetic_mean', 'kinetic_mean_se', 'ki
 STEPS_FS = (2, 0.5, 1, 3, 4, 5)
 
 
+def water(barostat=False):
+    """tip3p.pdb's rigid System, its waters at TIP3P's exact geometry, and its bodies; with a seeded
+    MonteCarloBarostat (1 bar, 300 K, every 25 steps) if asked."""
+    system, positions, bodies = equipartition.water('tip3p.pdb', 'amber14/tip3p.xml')
+    if barostat:
+        force = openmm.MonteCarloBarostat(1 * unit.bar, TEMPERATURE * unit.kelvin, 25)
+        force.setRandomNumberSeed(7)
+        system.addForce(force)
+    return system, positions, bodies
+
+
+def write_rows(path, rows, columns=None):
+    with open(path, 'w', newline='') as stream:
+        writer = csv.DictWriter(stream, columns or CSV_COLUMNS)
+        writer.writeheader()
+        writer.writerows(rows)
+
+
 def run(quick, out, log, threads=1, methods=METHODS, steps=None):
     """Every run; out + '.csv' gets a row per run as it ends; returns the report as markdown lines."""
     production_ps, short_ps, equilibrate_ps = (0.2, 0.1, 0.05) if quick else (20.0, 2.0, 2.0)
     began = time.time()
-    pdb, system = langevin.water_system()
-    positions = langevin.exact_geometry(system, pdb.positions)
-    bodies = mrattle.rigidBodies(pdb.topology, system)
+    system, positions, bodies = water()
     log('thermostats: equilibrating %g ps (LangevinMiddle + SETTLE, 2 fs)' % equilibrate_ps)
-    equilibration = openmm.LangevinMiddleIntegrator(TEMPERATURE, 1.0, 0.002)
-    equilibration.setRandomNumberSeed(11)
-    context = openmm.Context(system, equilibration, *platform(threads))
-    context.setPositions(positions)
-    context.setVelocitiesToTemperature(TEMPERATURE, 11)
-    equilibration.step(int(round(equilibrate_ps / 0.002)))
-    state = context.getState(getPositions=True, getVelocities=True)
-    start = (state.getPositions(), state.getVelocities())
-    del context
-    with open(out + '.csv', 'w', newline='') as stream:
-        csv.DictWriter(stream, CSV_COLUMNS).writeheader()
+    start = equipartition.equilibrate(system, positions, equilibrate_ps, threads)
     rows = []
     for method in methods:
         for step_fs in steps or STEPS_FS:
@@ -148,21 +168,84 @@ def run(quick, out, log, threads=1, methods=METHODS, steps=None):
             row = run_one(method, step_fs, production_ps if step_fs == 2 else short_ps, start, system, bodies, threads)
             log('thermostats: %s' % row)
             rows.append(row)
-            with open(out + '.csv', 'a', newline='') as stream:
-                csv.DictWriter(stream, CSV_COLUMNS).writerow(row)
+            write_rows(out + '.csv', rows)
     return report(rows, len(bodies), quick, production_ps, short_ps, equilibrate_ps, threads,
                   (time.time() - began) / 60)
 
 
-def run_one(method, step_fs, ps, start, system, bodies, threads):
-    """One run's row: at 2 fs (production) the sampling figures, at every step the temperatures and drift."""
-    production = step_fs == 2
+STEP_SIZE_METHODS = METHODS[1:]  # the sampling ones
+# MRattleLangevinIntegrator (1/ps): LangevinMiddle's splitting with M-RATTLE, to tell the splitting's share of a
+# difference from M-RATTLE's (only when asked for).
+M_RATTLE_LANGEVIN = 'M-RATTLE Langevin'
+STEP_SIZE_FS = (1, 0.5)  # 2 fs: the main run's production rows
+
+
+def run_step_sizes(quick, out, log, threads=1, steps=STEP_SIZE_FS, ps=20.0, methods=STEP_SIZE_METHODS):
+    """The potential energy's step-size dependence (NVT): each thermostat and LangevinMiddle + SETTLE at
+    `steps` for `ps` each, from the main run's start, with the 2-fs runs' figures (out + '.csv'). LangevinMiddle
+    is run at 1 fs and up only (its configurational sampling is the reference)."""
+    assert set(methods) <= set(STEP_SIZE_METHODS + (M_RATTLE_LANGEVIN,)), methods
+    ps, equilibrate_ps = (0.2, 0.05) if quick else (ps, 2.0)
+    system, positions, bodies = water()
+    start = equipartition.equilibrate(system, positions, equilibrate_ps, threads)
+    rows = []
+    for step_fs in steps:
+        for method in methods:
+            if method == 'LangevinMiddle + SETTLE' and step_fs < 1:
+                continue
+            rows.append(run_one(method, step_fs, ps, start, system, bodies, threads, production=True))
+            log('thermostats step sizes: %s' % rows[-1])
+            write_rows(out + '.csv', rows)
+    return rows
+
+
+DENSITY_COLUMNS = ['method', 'step_fs', 'ps', 'discarded_ps', 'density', 'density_se', 'potential_per_molecule',
+                   'potential_per_molecule_se', 'T', 'T_se', 'failure', 'wall_s']
+DENSITY_EQUILIBRATE_PS = 10.0
+
+
+def run_density(quick, out, log, threads=1, ps=40.0, discard_ps=4.0, equilibrate_ps=DENSITY_EQUILIBRATE_PS):
+    """NPT (MonteCarloBarostat, 1 bar, 300 K): each thermostat and LangevinMiddle + SETTLE at 2 fs from one
+    start (equilibrate_ps of LangevinMiddle + SETTLE under the barostat), discard_ps dropped, then ps
+    sampled every 10 fs: the mean density and potential energy per water with block standard errors.
+    Rows to out + '.csv'."""
+    if quick:
+        ps, discard_ps, equilibrate_ps = 0.2, 0.02, 0.05
+    system, positions, bodies = water(barostat=True)
+    log('thermostats NPT: equilibrating %g ps (LangevinMiddle + SETTLE, 2 fs, barostat)' % equilibrate_ps)
+    start = equipartition.equilibrate(system, positions, equilibrate_ps, threads)
+    dof = 6 * len(bodies) - 3
+    rows = []
+    for method in STEP_SIZE_METHODS:
+        row = dict(method=method, step_fs=2, ps=ps, discarded_ps=discard_ps)
+        try:
+            series, _, wall = run_series(method, 2, discard_ps + ps, start, system, bodies, threads)
+        except Exception as error:  # a blow-up is a result
+            row['failure'] = str(error).splitlines()[0]
+        else:
+            kept = len(series['time']) - int(round(ps * 1000 / SAMPLE_FS))
+            row['density'], row['density_se'] = langevin.block_mean(series['density'][kept:], BLOCKS)
+            u, u_se = langevin.block_mean(series['potential'][kept:], BLOCKS)
+            row['potential_per_molecule'], row['potential_per_molecule_se'] = u / len(bodies), u_se / len(bodies)
+            k, k_se = langevin.block_mean(series['kinetic'][kept:], BLOCKS)
+            row['T'], row['T_se'] = 2 * k / (dof * langevin.KB), 2 * k_se / (dof * langevin.KB)
+            row['wall_s'] = round(wall)
+        rows.append(row)
+        log('thermostats NPT: %s' % row)
+        write_rows(out + '.csv', rows, DENSITY_COLUMNS)
+    return rows
+
+
+def run_one(method, step_fs, ps, start, system, bodies, threads, production=None):
+    """One run's row: in production (by default at 2 fs) the sampling figures, at every step the temperatures
+    and drift."""
+    production = step_fs == 2 if production is None else production
     try:
         series, oxygens, wall = run_series(method, step_fs, ps, start, system, bodies, threads, keep_oxygens=production)
     except Exception as error:  # a blow-up is a result
         return dict(method=method, step_fs=step_fs, ps=ps, failure=str(error).splitlines()[0])
     row = dict(method=method, step_fs=step_fs, ps=ps, wall_s=round(wall))
-    if method != 'LangevinMiddle + SETTLE':  # it conserves nothing
+    if method not in ('LangevinMiddle + SETTLE', M_RATTLE_LANGEVIN):  # they conserve nothing
         drift, drift_se = drift_with_error(series['time'], series['conserved'])
         row['drift_kJ_per_mol_ns_per_molecule'], row['drift_se'] = drift / len(bodies), drift_se / len(bodies)
     for key in ('Ttrans', 'Trot'):
@@ -186,7 +269,9 @@ def rows_from_csv(path):
     return rows
 
 
-def report(rows, molecules, quick, production_ps, short_ps, equilibrate_ps, threads, minutes):
+def report(rows, molecules, quick, production_ps, short_ps, equilibrate_ps, threads, minutes, step_rows=None,
+           density_rows=None):
+    """The section: the main run's rows, and the follow-up studies' (step sizes, density) where given."""
     dof = 6 * molecules - 3
     kT = langevin.KB * TEMPERATURE
     mean_k, variance_k = 0.5 * dof * kT, 0.5 * dof * kT * kT
@@ -215,28 +300,130 @@ def report(rows, molecules, quick, production_ps, short_ps, equilibrate_ps, thre
              ' **Quick smoke run: too short to conclude anything.**' if quick else '')]
     md.append('### Canonical sampling at 2 fs\n')
     md.append('| Method | <K> (kJ/mol) | (<K> - canonical)/SE | var K ((kJ/mol)^2) | (var - canonical)/SE | '
-              'U per water (kJ/mol) | D (1e-5 cm^2/s) |')
-    md.append('|---|---|---|---|---|---|---|')
+              'U per water (kJ/mol) | D (1e-5 cm^2/s) | T_trans (K) | T_rot (K) |')
+    md.append('|---|---|---|---|---|---|---|---|---|')
     for row in rows:
         if row['step_fs'] != 2:
             continue
         if row.get('failure'):
-            md.append('| %s | failed: %s | | | | | |' % (row['method'], row['failure']))
+            md.append('| %s | failed: %s | | | | | | | |' % (row['method'], row['failure']))
             continue
-        md.append('| %s | %s | %s | %s | %s | %s | %s |' % (
+        md.append('| %s | %s | %s | %s | %s | %s | %s | %s | %s |' % (
             row['method'], pm(row, 'kinetic_mean', 'kinetic_mean_se'),
             sigmas(row, 'kinetic_mean', 'kinetic_mean_se', mean_k), pm(row, 'kinetic_variance', 'kinetic_variance_se', 0),
             sigmas(row, 'kinetic_variance', 'kinetic_variance_se', variance_k),
-            pm(row, 'potential_per_molecule', 'potential_per_molecule_se', 3), pm(row, 'D_1e-5_cm2_per_s', 'D_se', 2)))
-    md.append('\n### Conserved quantity and equipartition against the step size\n')
-    md.append('| Method | Step (fs) | Run (ps) | Drift (kJ/mol/ns per water) | T_trans (K) | T_rot (K) |')
-    md.append('|---|---|---|---|---|---|')
+            pm(row, 'potential_per_molecule', 'potential_per_molecule_se', 3), pm(row, 'D_1e-5_cm2_per_s', 'D_se', 2),
+            pm(row, 'Ttrans', 'Ttrans_se'), pm(row, 'Trot', 'Trot_se')))
+    md.append('\n### Conserved quantity against the step size\n')
+    md.append('The translational and rotational temperatures at these steps are in the equipartition table '
+              '(section "Equipartition of rigid water against step size"), from runs of their own.\n')
+    md.append('| Method | Step (fs) | Run (ps) | Drift (kJ/mol/ns per water) |')
+    md.append('|---|---|---|---|')
     for row in sorted(rows, key=lambda r: (METHODS.index(r['method']) if r['method'] in METHODS else 99, r['step_fs'])):
         if row.get('failure'):
-            md.append('| %s | %g | %g | failed: %s | | |' % (row['method'], row['step_fs'], row['ps'], row['failure']))
+            md.append('| %s | %g | %g | failed: %s |' % (row['method'], row['step_fs'], row['ps'], row['failure']))
             continue
-        md.append('| %s | %g | %g | %s | %s | %s |' % (
-            row['method'], row['step_fs'], row['ps'],
-            pm(row, 'drift_kJ_per_mol_ns_per_molecule', 'drift_se', 3) if 'drift_se' in row else '(none conserved)',
-            pm(row, 'Ttrans', 'Ttrans_se'), pm(row, 'Trot', 'Trot_se')))
+        if 'drift_se' in row:  # LangevinMiddle conserves nothing
+            md.append('| %s | %g | %g | %s |' % (row['method'], row['step_fs'], row['ps'],
+                                                pm(row, 'drift_kJ_per_mol_ns_per_molecule', 'drift_se', 3)))
+    if step_rows:
+        md += report_step_sizes([r for r in rows if r['step_fs'] == 2 and r['method'] in STEP_SIZE_METHODS] + step_rows,
+                                dof, kT)
+    if density_rows:
+        md += report_density(density_rows)
+    return md
+
+
+def combined(a, b, key, se):
+    """a - b, its standard error (the two added in quadrature) and the difference in those errors."""
+    difference, error = a[key] - b[key], math.hypot(a[se], b[se])
+    return difference, error, difference / error
+
+
+def report_step_sizes(rows, dof, kT):
+    """The potential energy per water against the step size (NVT), beside LangevinMiddle + SETTLE's pooled over
+    its steps (its configurational sampling is accurate at any step: its own fit below checks that)."""
+    reference = pooled([r for r in rows if r['method'] == 'LangevinMiddle + SETTLE' and 'potential_per_molecule' in r])
+    md = ['\n### Potential energy against the step size (NVT)\n',
+          'Each run from the start above, sampled every 10 fs; the 2-fs rows are the production runs above. '
+          'T: the kinetic energy\'s mean as a temperature, 2 <K>/(N k). The reference is LangevinMiddle + SETTLE\'s U '
+          'per water pooled over its steps (inverse-variance weighted mean): %.3f +- %.3f kJ/mol. The last column: '
+          'U per water minus the reference, +- the two standard errors combined (in those errors).\n' % reference,
+          '| Method | Step (fs) | Run (ps) | T (K) | U per water (kJ/mol) | U - reference (kJ/mol) |', '|---|---|---|---|---|---|']
+    order = {m: k for k, m in enumerate(STEP_SIZE_METHODS + (M_RATTLE_LANGEVIN,))}
+    for r in sorted(rows, key=lambda r: (order[r['method']], -r['step_fs'])):
+        if r.get('failure'):
+            md.append('| %s | %g | %g | failed: %s | | |' % (r['method'], r['step_fs'], r['ps'], r['failure']))
+            continue
+        d, e = r['potential_per_molecule'] - reference[0], math.hypot(r['potential_per_molecule_se'], reference[1])
+        md.append('| %s | %g | %g | %.1f +- %.1f | %.3f +- %.3f | %+.3f +- %.3f (%+.1f) |' % (
+            r['method'], r['step_fs'], r['ps'], 2 * r['kinetic_mean'] / (dof * langevin.KB),
+            2 * r['kinetic_mean_se'] / (dof * langevin.KB), r['potential_per_molecule'], r['potential_per_molecule_se'],
+            d, e, d / e))
+    gaps = []
+    for step in sorted({r['step_fs'] for r in rows}, reverse=True):
+        both = [r for r in rows if r['step_fs'] == step and r['method'] in STEP_SIZE_METHODS[:2]
+                and 'potential_per_molecule' in r]
+        if both:
+            u, se = pooled(both)
+            d, e = u - reference[0], math.hypot(se, reference[1])
+            gaps.append('%g fs %+.3f +- %.3f (%+.1f SE%s)' % (step, d, e, d / e, '' if len(both) == 2 else ', one'))
+    md.append('\nThe two thermostats pooled at each step, minus the reference: ' + '; '.join(gaps) + '.')
+    fits = []
+    for method in sorted({r['method'] for r in rows}, key=order.get):
+        points = [r for r in rows if r['method'] == method and 'potential_per_molecule' in r]
+        if len({r['step_fs'] for r in points}) >= 2:
+            (u0, u0_se), (c, c_se), chi2, dof_fit = fit_step_squared(points)
+            fits.append('%s: U(0) = %.3f +- %.3f, c = %+.4f +- %.4f kJ/mol/fs^2 (%+.1f SE; chi^2 %.1f for %d)' % (
+                method, u0, u0_se, c, c_se, c / c_se, chi2, dof_fit))
+    if fits:
+        md.append('\nWeighted least-squares fits U per water = U(0) + c h^2 (h in fs; the errors from the fit\'s '
+                  'covariance, not rescaled by chi^2): ' + '; '.join(fits) + '.')
+    return md
+
+
+def pooled(points):
+    """The inverse-variance weighted mean of the rows' U per water and its standard error."""
+    w = 1 / np.array([r['potential_per_molecule_se'] for r in points]) ** 2
+    u = np.array([r['potential_per_molecule'] for r in points])
+    return float(np.sum(w * u) / np.sum(w)), float(1 / math.sqrt(np.sum(w)))
+
+
+def fit_step_squared(points):
+    """U = U0 + c h^2 by weighted least squares: (U0, SE), (c, SE), chi^2 and its degrees of freedom."""
+    h2 = np.array([r['step_fs'] ** 2 for r in points])
+    u = np.array([r['potential_per_molecule'] for r in points])
+    w = 1 / np.array([r['potential_per_molecule_se'] for r in points]) ** 2
+    design = np.column_stack([np.ones_like(h2), h2])
+    covariance = np.linalg.inv(design.T @ (w[:, None] * design))
+    coefficients = covariance @ design.T @ (w * u)
+    chi2 = float(np.sum(w * (u - design @ coefficients) ** 2))
+    errors = np.sqrt(np.diag(covariance))
+    return (coefficients[0], errors[0]), (coefficients[1], errors[1]), chi2, len(points) - 2
+
+
+def report_density(rows):
+    """NPT: density and potential energy per water beside LangevinMiddle + SETTLE's."""
+    reference = [r for r in rows if r['method'] == 'LangevinMiddle + SETTLE' and 'density' in r]
+    first = rows[0]
+    md = ['\n### Density under a barostat (NPT, 2 fs)\n',
+          'OpenMM\'s MonteCarloBarostat (1 bar, 300 K, every 25 steps, seeded) added to the System above; one start: '
+          '%g ps of LangevinMiddle + SETTLE under the barostat from the PDB\'s box; each method then drops %g ps '
+          'and samples every 10 fs for %g ps. Density from the box volume and the total mass; means +- standard '
+          'errors from %d blocks; differences from LangevinMiddle + SETTLE\'s +- the combined error (in those '
+          'errors).\n' % (DENSITY_EQUILIBRATE_PS, first['discarded_ps'], first['ps'], BLOCKS),
+          '| Method | Density (g/mL) | - LangevinMiddle + SETTLE\'s (g/mL) | U per water (kJ/mol) | T (K) |',
+          '|---|---|---|---|---|']
+    for r in rows:
+        if r.get('failure'):
+            md.append('| %s | failed: %s | | | |' % (r['method'], r['failure']))
+            continue
+        if reference and r is not reference[0]:
+            d, e, z = combined(r, reference[0], 'density', 'density_se')
+            versus = '%+.4f +- %.4f (%+.1f)' % (d, e, z)
+        else:
+            versus = '(reference)' if reference else '-'
+        md.append('| %s | %.4f +- %.4f | %s | %.3f +- %.3f | %.1f +- %.1f |' % (
+            r['method'], r['density'], r['density_se'], versus, r['potential_per_molecule'],
+            r['potential_per_molecule_se'], r['T'], r['T_se']))
     return md
