@@ -101,6 +101,8 @@ public:
      * over kickTime with the Context's forces; RATTLE's velocity step; a drift over
      * driftTime with the bodies' resets and SHAKE; Langevin noise (v = a v + noiseScale
      * sqrt(1/m) g, a = noiseDecay) followed by the velocity step; the velocity step.
+     * resetFollows: the next pass starts with a drift, so the bodies' velocity step after
+     * the noise is left to it (kernels/advance.cc says why that is exact).
      */
     struct Pass {
         double kickTime = 0;
@@ -108,6 +110,7 @@ public:
         double driftTime = 0;
         double noiseDecay = 1, noiseScale = 0;
         bool projectAtEnd = false;
+        bool resetFollows = false;
     };
     /**
      * One launch of the device (kernels/advance.cc); the step's first pass also backs up the
@@ -207,7 +210,7 @@ private:
     OpenMM::ComputeKernel advanceGroups, projectBodies, constrainFreeVelocities, collideBodies;
     // Indices of the arguments set at each launch.
     int advanceBackupIndex, advanceKickTime, advanceProjectAfterKick, advanceDriftTime, advanceTolerance,
-        advanceNoiseDecay, advanceNoiseScale, advanceRandomIndex, advanceProjectAtEnd, projectOnlyIfNotRigid,
+        advanceNoiseDecay, advanceNoiseScale, advanceRandomIndex, advanceProjectAtEnd, advanceResetFollows, projectOnlyIfNotRigid,
         freeVelocitiesTolerance, collideKT, collideRandomIndex;
 };
 

@@ -36,6 +36,7 @@ void CommonIntegrateMRattleLangevinStepKernel::execute(ContextImpl& context, con
         first.driftTime = 0.5 * h;
         first.noiseDecay = a;
         first.noiseScale = std::sqrt((1 - a * a) * BOLTZ * integrator.getTemperature());
+        first.resetFollows = true;
         dynamics.advance(first);
         CommonRigidBodyDynamics::Pass second;
         second.driftTime = 0.5 * h;

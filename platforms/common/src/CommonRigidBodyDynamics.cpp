@@ -234,6 +234,7 @@ void CommonRigidBodyDynamics::advance(const Pass& pass) {
         advanceGroups->setArg(advanceRandomIndex,
                               (unsigned int) cc.getIntegrationUtilities().prepareRandomNumbers(cc.getPaddedNumAtoms()));
     advanceGroups->setArg(advanceProjectAtEnd, pass.projectAtEnd ? 1 : 0);
+    advanceGroups->setArg(advanceResetFollows, pass.resetFollows ? 1 : 0);
     if (numGroups > 0)
         advanceGroups->execute(numGroups);
     backupStepIndex = -1;  // once per step

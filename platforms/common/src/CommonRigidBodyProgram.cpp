@@ -150,6 +150,7 @@ void CommonRigidBodyDynamics::setKernelArguments() {
         advance.add(stepFailure.velmBackup());
     advanceRandomIndex = advance.add(0u);
     advanceProjectAtEnd = advance.add(0);
+    advanceResetFollows = advance.add(0);
     advance.add(stepFailure.flag());
 
     CommonKernelArguments projection(projectBodies, doubleMixed);

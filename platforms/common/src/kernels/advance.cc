@@ -9,6 +9,11 @@
  *   body, SHAKE for a cluster, a drift for a free atom), Langevin noise and a projection
  *   (noiseScale != 0), projection (projectAtEnd).
  *
+ * A body's reset reads of its velocities only its momentum and angular momentum, which its
+ * projection keeps: so a body is not projected right before a reset, that of this pass's
+ * drift (after the kick) or that of the next pass (after the noise, when resetFollows). Its
+ * reset is the same to round-off, for a projection's work less.
+ *
  * A group's phases read and write only its own atoms, so no phase waits for another group.
  * A failure of any group sets failure[0]; the host puts back the backup (CommonStepFailure).
  *
@@ -20,17 +25,46 @@
 #define GROUP_CLUSTER 1
 #define GROUP_FREE 2
 
-/** RATTLE's velocity step for one group; false if a cluster's did not converge. */
-DEVICE bool projectGroup(int kind, int index, int start, int end, GLOBAL const int* RESTRICT atoms,
-        GLOBAL const int* RESTRICT bodyShape, GLOBAL const int* RESTRICT clusterStart,
+/** RATTLE's velocity step for a cluster of free constraints; false if it did not converge. */
+DEVICE bool projectCluster(int kind, int index, GLOBAL const int* RESTRICT clusterStart,
         GLOBAL const int2* RESTRICT constraintAtoms, mixed tolerance, GLOBAL const real4* RESTRICT posq,
         GLOBAL const real4* RESTRICT posqCorrection, GLOBAL mixed4* RESTRICT velm) {
-    if (kind == GROUP_BODY)
-        projectBody(start, end, atoms, bodyShape[index], posq, posqCorrection, velm, false);
-    else if (kind == GROUP_CLUSTER)
-        return rattleCluster(clusterStart[index], clusterStart[index+1], constraintAtoms, posq, posqCorrection, velm,
-                             tolerance);
-    return true;
+    if (kind != GROUP_CLUSTER)
+        return true;  // a free atom has nothing to project
+    return rattleCluster(clusterStart[index], clusterStart[index+1], constraintAtoms, posq, posqCorrection, velm,
+                         tolerance);
+}
+
+/** A pass's phases for one body (the backup and the kick a loop of their own, then one loop per projection or reset). */
+DEVICE bool advanceBody(int body, int start, int end, GLOBAL const int* RESTRICT bodyAtoms, int shape,
+        GLOBAL mixed4* RESTRICT reference, GLOBAL mixed* RESTRICT orientation, GLOBAL real4* RESTRICT posq,
+        GLOBAL real4* RESTRICT posqCorrection, GLOBAL mixed4* RESTRICT velm, GLOBAL const mm_long* RESTRICT force,
+        int paddedNumAtoms, bool backup, GLOBAL real4* RESTRICT posqBackup, GLOBAL real4* RESTRICT correctionBackup,
+        GLOBAL mixed4* RESTRICT velmBackup, mixed kickScale, bool projectAfterKick, mixed driftTime, mixed noiseDecay,
+        mixed noiseScale, GLOBAL const float4* RESTRICT random, unsigned int randomIndex, bool projectAtEnd,
+        bool resetFollows) {
+    bool ok = true;
+    for (int k = start; k < end; k++) {
+        const int atom = bodyAtoms[k];
+        if (backup)
+            backupAtom(atom, posq, posqCorrection, velm, posqBackup, correctionBackup, velmBackup);
+        if (kickScale != 0)
+            ok = kickAtom(atom, kickScale, force, paddedNumAtoms, velm) && ok;
+    }
+    if (driftTime != 0)  // no projection before the reset: see above
+        ok = resetBody(body, start, end, bodyAtoms, reference, orientation, shape, driftTime, posq, posqCorrection,
+                       velm) && ok;
+    else if (projectAfterKick)
+        projectBody(start, end, bodyAtoms, shape, posq, posqCorrection, velm, false);
+    if (noiseScale != 0) {
+        for (int k = start; k < end; k++)
+            noiseAtom(bodyAtoms[k], noiseDecay, noiseScale, random, randomIndex, velm);
+        if (!resetFollows)
+            projectBody(start, end, bodyAtoms, shape, posq, posqCorrection, velm, false);
+    }
+    if (projectAtEnd)
+        projectBody(start, end, bodyAtoms, shape, posq, posqCorrection, velm, false);
+    return ok;
 }
 
 KERNEL void advanceGroups(int numBodies, int numClusters, int numFree, GLOBAL const int* RESTRICT bodyStart,
@@ -45,7 +79,7 @@ KERNEL void advanceGroups(int numBodies, int numClusters, int numFree, GLOBAL co
         GLOBAL real4* RESTRICT posqBackup, GLOBAL real4* RESTRICT correctionBackup, GLOBAL mixed4* RESTRICT velmBackup,
         int backupStepIndex, mixed kickTime, int projectAfterKick, mixed driftTime, mixed tolerance, mixed noiseDecay,
         mixed noiseScale, GLOBAL const float4* RESTRICT random, unsigned int randomIndex, int projectAtEnd,
-        GLOBAL int* RESTRICT failure) {
+        int resetFollows, GLOBAL int* RESTRICT failure) {
     if (failure[0] != 0)
         return;
     if (backupStepIndex >= 0 && GLOBAL_ID == 0)
@@ -77,35 +111,36 @@ KERNEL void advanceGroups(int numBodies, int numClusters, int numFree, GLOBAL co
             atoms = freeAtoms;
         }
         bool ok = true;
-        for (int k = start; k < end; k++) {
-            const int atom = atoms[k];
-            if (backupStepIndex >= 0)
-                backupAtom(atom, posq, posqCorrection, velm, posqBackup, correctionBackup, velmBackup);
-            if (kickTime != 0)
-                ok = kickAtom(atom, kickScale, force, paddedNumAtoms, velm) && ok;
+        if (kind == GROUP_BODY)
+            ok = advanceBody(index, start, end, atoms, bodyShape[index], bodyReference, bodyOrientation, posq,
+                             posqCorrection, velm, force, paddedNumAtoms, backupStepIndex >= 0, posqBackup,
+                             correctionBackup, velmBackup, kickScale, projectAfterKick != 0, driftTime, noiseDecay,
+                             noiseScale, random, randomIndex, projectAtEnd != 0, resetFollows != 0);
+        else {
+            for (int k = start; k < end; k++) {
+                const int atom = atoms[k];
+                if (backupStepIndex >= 0)
+                    backupAtom(atom, posq, posqCorrection, velm, posqBackup, correctionBackup, velmBackup);
+                if (kickTime != 0)
+                    ok = kickAtom(atom, kickScale, force, paddedNumAtoms, velm) && ok;
+            }
+            if (projectAfterKick)
+                ok = projectCluster(kind, index, clusterStart, constraintAtoms, tolerance, posq, posqCorrection, velm) && ok;
+            if (driftTime != 0) {
+                if (kind == GROUP_CLUSTER)
+                    ok = shakeCluster(clusterStart[index], clusterStart[index+1], constraintAtoms, constraintDistance,
+                                      start, end, atoms, driftTime, tolerance, posq, posqCorrection, velm, posDelta) && ok;
+                else
+                    driftAtom(atoms[start], driftTime, posq, posqCorrection, velm);
+            }
+            if (noiseScale != 0) {
+                for (int k = start; k < end; k++)
+                    noiseAtom(atoms[k], noiseDecay, noiseScale, random, randomIndex, velm);
+                ok = projectCluster(kind, index, clusterStart, constraintAtoms, tolerance, posq, posqCorrection, velm) && ok;
+            }
+            if (projectAtEnd)
+                ok = projectCluster(kind, index, clusterStart, constraintAtoms, tolerance, posq, posqCorrection, velm) && ok;
         }
-        if (projectAfterKick)
-            ok = projectGroup(kind, index, start, end, atoms, bodyShape, clusterStart, constraintAtoms, tolerance, posq,
-                              posqCorrection, velm) && ok;
-        if (driftTime != 0) {
-            if (kind == GROUP_BODY)
-                ok = resetBody(index, start, end, atoms, bodyReference, bodyOrientation, bodyShape[index], driftTime, posq,
-                               posqCorrection, velm) && ok;
-            else if (kind == GROUP_CLUSTER)
-                ok = shakeCluster(clusterStart[index], clusterStart[index+1], constraintAtoms, constraintDistance, start,
-                                  end, atoms, driftTime, tolerance, posq, posqCorrection, velm, posDelta) && ok;
-            else
-                driftAtom(atoms[start], driftTime, posq, posqCorrection, velm);
-        }
-        if (noiseScale != 0) {
-            for (int k = start; k < end; k++)
-                noiseAtom(atoms[k], noiseDecay, noiseScale, random, randomIndex, velm);
-            ok = projectGroup(kind, index, start, end, atoms, bodyShape, clusterStart, constraintAtoms, tolerance, posq,
-                              posqCorrection, velm) && ok;
-        }
-        if (projectAtEnd)
-            ok = projectGroup(kind, index, start, end, atoms, bodyShape, clusterStart, constraintAtoms, tolerance, posq,
-                              posqCorrection, velm) && ok;
         if (!ok)
             recordFailure(failure);
     }

@@ -116,34 +116,69 @@ DEVICE void recordFailure(GLOBAL int* RESTRICT failure) {
     failure[0] = 1;
 }
 
-/**
- * A body's centre of mass relative to its first atom (origin) and its mean velocity, from
- * velocities whose .w is the inverse mass. Positions relative to the first atom keep their
- * digits however far the body is from the origin.
- */
-DEVICE void bodyCenterAndVelocity(int start, int end, GLOBAL const int* RESTRICT bodyAtoms,
-        GLOBAL const real4* RESTRICT posq, GLOBAL const real4* RESTRICT posqCorrection,
-        GLOBAL const mixed4* RESTRICT velocities, mixed3* origin, mixed3* center, mixed3* meanVelocity) {
-    *origin = loadPosition(posq, posqCorrection, bodyAtoms[start]);
-    mixed totalMass = 0;
-    mixed3 weighted = make_mixed3(0, 0, 0), momentum = make_mixed3(0, 0, 0);
-    for (int k = start; k < end; k++) {
-        const int atom = bodyAtoms[k];
-        const mixed4 v = velocities[atom];
-        const mixed m = 1/v.w;
-        totalMass += m;
-        weighted += m*(loadPosition(posq, posqCorrection, atom) - *origin);
-        momentum += m*make_mixed3(v.x, v.y, v.z);
-    }
-    *center = weighted*(1/totalMass);
-    *meanVelocity = momentum*(1/totalMass);
-}
-
 /** velocity += scale f / m for one atom (scale: the kick's time over the force buffer's fixed-point unit). */
 DEVICE mixed4 kicked(mixed4 velocity, mixed scale, GLOBAL const mm_long* RESTRICT force, int index, int paddedNumAtoms) {
     velocity.x += scale*force[index]*velocity.w;
     velocity.y += scale*force[index+paddedNumAtoms]*velocity.w;
     velocity.z += scale*force[index+paddedNumAtoms*2]*velocity.w;
     return velocity;
+}
+
+/** A body's motion as one loop over its atoms gathers it (gatherBody). */
+typedef struct {
+    mixed3 origin;  // the body's first atom: positions are taken relative to it, so no digits are lost far from the origin
+    mixed3 center;  // the centre of mass, relative to origin
+    mixed3 V;       // the centre-of-mass velocity
+    Matrix3 J;      // the second moment about the centre, sum m a a^T (a = x - origin - center)
+    mixed3 L;       // the angular momentum about the centre, sum m a x v
+    mixed shapeError;  // with a reference: the largest |(x_k - x_0) - Q (ref_k - ref_0)|^2
+} BodySums;
+
+/**
+ * One loop over a body's atoms (velocities' .w the inverse mass): its centre, mean velocity,
+ * second moment and angular momentum, summed about its first atom and moved to the centre
+ * (J_c = J_0 - M c c^T, L_c = L_0 - M c x V), so the reset and the projection read the atoms
+ * once before they write them. With checkShape, also how far the body's shape, seen from
+ * its first atom, is from its reference geometry turned by Q. (Folding the step's backup
+ * and kick into this loop made it no faster through pocl: they stay a loop of their own.)
+ */
+DEVICE BodySums gatherBody(int start, int end, GLOBAL const int* RESTRICT bodyAtoms,
+        GLOBAL const real4* RESTRICT posq, GLOBAL const real4* RESTRICT posqCorrection,
+        GLOBAL const mixed4* RESTRICT velm, bool checkShape, GLOBAL const mixed4* RESTRICT reference, Matrix3 Q) {
+    BodySums sums;
+    sums.origin = loadPosition(posq, posqCorrection, bodyAtoms[start]);
+    mixed mass = 0;
+    mixed3 moment = make_mixed3(0, 0, 0), momentum = make_mixed3(0, 0, 0), angular = make_mixed3(0, 0, 0);
+    Matrix3 J = zeroMatrix();
+    mixed3 ref0 = make_mixed3(0, 0, 0);
+    if (checkShape) {
+        const mixed4 q = reference[start];
+        ref0 = make_mixed3(q.x, q.y, q.z);
+    }
+    sums.shapeError = 0;
+    for (int k = start; k < end; k++) {
+        const int atom = bodyAtoms[k];
+        const mixed4 v = velm[atom];
+        const mixed m = 1/v.w;  // body members are massive
+        const mixed3 a = loadPosition(posq, posqCorrection, atom) - sums.origin;
+        const mixed3 velocity = make_mixed3(v.x, v.y, v.z);
+        mass += m;
+        moment += m*a;
+        momentum += m*velocity;
+        angular += m*cross(a, velocity);
+        addOuter(&J, m, a);
+        if (checkShape) {
+            const mixed4 q = reference[k];
+            const mixed3 d = a - apply(Q, make_mixed3(q.x, q.y, q.z) - ref0);
+            sums.shapeError = max(sums.shapeError, dot(d, d));
+        }
+    }
+    const mixed inverseMass = 1/mass;
+    sums.center = moment*inverseMass;
+    sums.V = momentum*inverseMass;
+    addOuter(&J, -mass, sums.center);
+    sums.J = J;
+    sums.L = angular - mass*cross(sums.center, sums.V);
+    return sums;
 }
 

@@ -16,7 +16,8 @@ KERNEL void collideBodies(int numBodies, GLOBAL const int* RESTRICT bodyStart, G
     for (int body = GLOBAL_ID; body < numBodies; body += GLOBAL_SIZE) {
         const int start = bodyStart[body], end = bodyStart[body+1];
         mixed residual, scale;
-        rigidMotion(start, end, bodyAtoms, bodyShape[body], posq, posqCorrection, velm, &residual, &scale);
+        const RigidMotion motion = rigidMotion(start, end, bodyAtoms, bodyShape[body], posq, posqCorrection, velm);
+        rigidResidual(motion, start, end, bodyAtoms, posq, posqCorrection, velm, &residual, &scale);
         if (!(residual > COLLISION_THRESHOLD*COLLISION_THRESHOLD*scale || (scale == 0 && residual > 0)))
             continue;  // still rigid: no atom of it collided
         for (int k = start; k < end; k++) {

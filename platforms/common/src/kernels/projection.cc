@@ -12,43 +12,51 @@ typedef struct {
 
 /**
  * The mass-weighted projection of a body's velocities onto rigid-body motion,
- * v_i = V + w x a_i with w = I^-1 L (in the plane normal to the axis for a linear body), and
- * how far they are from it: *residual is the largest |v_i - rigid_i|^2, *scale the largest
- * |rigid_i|^2.
+ * v_i = V + w x a_i with w = I^-1 L (in the plane normal to the axis for a linear body), from
+ * what gatherBody summed of them.
  */
-DEVICE RigidMotion rigidMotion(int start, int end, GLOBAL const int* RESTRICT bodyAtoms, int shape,
-        GLOBAL const real4* RESTRICT posq, GLOBAL const real4* RESTRICT posqCorrection,
-        GLOBAL const mixed4* RESTRICT velm, mixed* residual, mixed* scale) {
+DEVICE RigidMotion rigidMotionOf(BodySums sums, int start, int end, GLOBAL const int* RESTRICT bodyAtoms, int shape,
+        GLOBAL const real4* RESTRICT posq, GLOBAL const real4* RESTRICT posqCorrection) {
     RigidMotion motion;
-    bodyCenterAndVelocity(start, end, bodyAtoms, posq, posqCorrection, velm, &motion.origin, &motion.center, &motion.V);
-    Matrix3 J = zeroMatrix();
-    mixed3 L = make_mixed3(0, 0, 0), u = make_mixed3(1, 0, 0);
-    mixed farthest = -1;
-    for (int k = start; k < end; k++) {
-        const int atom = bodyAtoms[k];
-        const mixed4 v = velm[atom];
-        const mixed m = 1/v.w;
-        const mixed3 a = loadPosition(posq, posqCorrection, atom) - motion.origin - motion.center;
-        addOuter(&J, m, a);
-        L += m*cross(a, make_mixed3(v.x, v.y, v.z));
-        if (dot(a, a) > farthest) {
-            farthest = dot(a, a);
-            u = a;
-        }
-    }
+    motion.origin = sums.origin;
+    motion.center = sums.center;
+    motion.V = sums.V;
     motion.omega = make_mixed3(0, 0, 0);
-    const mixed j = J.m00 + J.m11 + J.m22;
+    const mixed j = sums.J.m00 + sums.J.m11 + sums.J.m22;
     if (shape == SHAPE_POINT) {
         // A point only translates.
     }
     else if (shape == SHAPE_LINEAR) {
+        mixed3 u = make_mixed3(1, 0, 0);
+        mixed farthest = -1;
+        for (int k = start; k < end; k++) {
+            const mixed3 a = loadPosition(posq, posqCorrection, bodyAtoms[k]) - motion.origin - motion.center;
+            if (dot(a, a) > farthest) {
+                farthest = dot(a, a);
+                u = a;
+            }
+        }
         if (farthest > 0 && j > 0) {
             u *= 1/sqrt(farthest);
-            motion.omega = (L - dot(L, u)*u)*(1/j);
+            motion.omega = (sums.L - dot(sums.L, u)*u)*(1/j);
         }
     }
     else
-        solve3(inertiaOf(J, j), L, &motion.omega);
+        solve3(inertiaOf(sums.J, j), sums.L, &motion.omega);
+    return motion;
+}
+
+/** The rigid motion of a body's velocities. */
+DEVICE RigidMotion rigidMotion(int start, int end, GLOBAL const int* RESTRICT bodyAtoms, int shape,
+        GLOBAL const real4* RESTRICT posq, GLOBAL const real4* RESTRICT posqCorrection, GLOBAL mixed4* RESTRICT velm) {
+    const BodySums sums = gatherBody(start, end, bodyAtoms, posq, posqCorrection, velm, false, velm, zeroMatrix());
+    return rigidMotionOf(sums, start, end, bodyAtoms, shape, posq, posqCorrection);
+}
+
+/** How far a body's velocities are from their rigid motion: *residual is the largest |v_i - rigid_i|^2, *scale the largest |rigid_i|^2. */
+DEVICE void rigidResidual(RigidMotion motion, int start, int end, GLOBAL const int* RESTRICT bodyAtoms,
+        GLOBAL const real4* RESTRICT posq, GLOBAL const real4* RESTRICT posqCorrection,
+        GLOBAL const mixed4* RESTRICT velm, mixed* residual, mixed* scale) {
     *scale = 0;
     *residual = 0;
     for (int k = start; k < end; k++) {
@@ -59,7 +67,17 @@ DEVICE RigidMotion rigidMotion(int start, int end, GLOBAL const int* RESTRICT bo
         *scale = max(*scale, dot(rigid, rigid));
         *residual = max(*residual, dot(difference, difference));
     }
-    return motion;
+}
+
+/** Replace a body's velocities by its rigid motion. */
+DEVICE void setRigidVelocities(RigidMotion motion, int start, int end, GLOBAL const int* RESTRICT bodyAtoms,
+        GLOBAL const real4* RESTRICT posq, GLOBAL const real4* RESTRICT posqCorrection, GLOBAL mixed4* RESTRICT velm) {
+    for (int k = start; k < end; k++) {
+        const int atom = bodyAtoms[k];
+        const mixed4 v = velm[atom];
+        const mixed3 rigid = motion.V + cross(motion.omega, loadPosition(posq, posqCorrection, atom) - motion.origin - motion.center);
+        velm[atom] = make_mixed4(rigid.x, rigid.y, rigid.z, v.w);
+    }
 }
 
 /**
@@ -69,16 +87,14 @@ DEVICE RigidMotion rigidMotion(int start, int end, GLOBAL const int* RESTRICT bo
 DEVICE void projectBody(int start, int end, GLOBAL const int* RESTRICT bodyAtoms, int shape,
         GLOBAL const real4* RESTRICT posq, GLOBAL const real4* RESTRICT posqCorrection, GLOBAL mixed4* RESTRICT velm,
         bool onlyIfNotRigid) {
-    mixed residual, scale;
-    const RigidMotion motion = rigidMotion(start, end, bodyAtoms, shape, posq, posqCorrection, velm, &residual, &scale);
-    if (onlyIfNotRigid && residual <= RIGID_TOLERANCE*RIGID_TOLERANCE*scale)
-        return;
-    for (int k = start; k < end; k++) {
-        const int atom = bodyAtoms[k];
-        const mixed4 v = velm[atom];
-        const mixed3 rigid = motion.V + cross(motion.omega, loadPosition(posq, posqCorrection, atom) - motion.origin - motion.center);
-        velm[atom] = make_mixed4(rigid.x, rigid.y, rigid.z, v.w);
+    const RigidMotion motion = rigidMotion(start, end, bodyAtoms, shape, posq, posqCorrection, velm);
+    if (onlyIfNotRigid) {
+        mixed residual, scale;
+        rigidResidual(motion, start, end, bodyAtoms, posq, posqCorrection, velm, &residual, &scale);
+        if (residual <= RIGID_TOLERANCE*RIGID_TOLERANCE*scale)
+            return;
     }
+    setRigidVelocities(motion, start, end, bodyAtoms, posq, posqCorrection, velm);
 }
 
 /** Every body's projection (velocities set from the host, Andersen collisions). */

@@ -65,28 +65,7 @@ DEVICE bool solveRotation(Matrix3 J, mixed3 target, Matrix3* delta) {
 }
 
 /**
- * P - 1 of a body's reset: the torque condition's Newton solve. Each atom's drift relative to
- * the centres is h (v - V); its position about the centre is (x - origin) - center, the
- * centre taken relative to the first atom (origin) so that no digits are lost.
- */
-DEVICE bool solveBodyRotation(int start, int end, GLOBAL const int* RESTRICT bodyAtoms,
-        GLOBAL const real4* RESTRICT posq, GLOBAL const real4* RESTRICT posqCorrection,
-        GLOBAL const mixed4* RESTRICT newVelocity, mixed3 origin, mixed3 center, mixed3 V, mixed h, Matrix3* delta) {
-    Matrix3 J = zeroMatrix();
-    mixed3 target = make_mixed3(0, 0, 0);
-    for (int k = start; k < end; k++) {
-        const int atom = bodyAtoms[k];
-        const mixed4 v = newVelocity[atom];
-        const mixed m = 1/v.w;
-        const mixed3 a = loadPosition(posq, posqCorrection, atom) - origin - center;
-        addOuter(&J, m, a);
-        target += m*cross(a, h*(make_mixed3(v.x, v.y, v.z) - V));
-    }
-    return solveRotation(J, target, delta);
-}
-
-/**
- * The same for a linear body, in closed form: u x (j p - w) = 0 with p = P u, spin about the
+ * P - 1 of a linear body's reset, in closed form: u x (j p - w) = 0 with p = P u, spin about the
  * axis no degree of freedom, P the smallest rotation taking u to p.
  */
 DEVICE bool solveLinearBodyRotation(int start, int end, GLOBAL const int* RESTRICT bodyAtoms,

@@ -94,21 +94,13 @@ DEVICE void storeOrientation(GLOBAL mixed* RESTRICT orientation, int body, Matri
  * again (one step of Newton's polar iteration, from a matrix orthonormal to round-off). Its
  * reference geometry (reference[k] for bodyAtoms[k], about its centre of mass) turned by Q
  * is then the body's shape, exact to round-off however many steps it takes. If the body's
- * positions a about its centre are not Q ref (beyond STALE_REFERENCE nm: something else moved
- * it, e.g. another integrator of a CompoundIntegrator), they become its reference, Q = 1.
+ * shape is not Q ref (stale: something else moved it, e.g. another integrator of a
+ * CompoundIntegrator), its positions a about its centre become its reference, Q = 1.
  */
 DEVICE Matrix3 turnOrientation(int body, int start, int end, GLOBAL const int* RESTRICT bodyAtoms,
         GLOBAL mixed4* RESTRICT reference, GLOBAL mixed* RESTRICT orientation, GLOBAL const real4* RESTRICT posq,
-        GLOBAL const real4* RESTRICT posqCorrection, mixed3 origin, mixed3 center, Matrix3 delta) {
-    Matrix3 Q = loadOrientation(orientation, body);
-    mixed stale = 0;
-    for (int k = start; k < end; k++) {
-        const mixed3 a = loadPosition(posq, posqCorrection, bodyAtoms[k]) - origin - center;
-        const mixed4 q = reference[k];
-        const mixed3 d = a - apply(Q, make_mixed3(q.x, q.y, q.z));
-        stale = max(stale, dot(d, d));
-    }
-    if (!(stale <= STALE_REFERENCE*STALE_REFERENCE)) {
+        GLOBAL const real4* RESTRICT posqCorrection, Matrix3 Q, bool stale, mixed3 origin, mixed3 center, Matrix3 delta) {
+    if (stale) {
         for (int k = start; k < end; k++) {
             const mixed3 a = loadPosition(posq, posqCorrection, bodyAtoms[k]) - origin - center;
             reference[k] = make_mixed4(a.x, a.y, a.z, 0);
@@ -127,32 +119,34 @@ DEVICE Matrix3 turnOrientation(int body, int start, int end, GLOBAL const int* R
  * M-RATTLE's drift and position reset of one body over h, from its positions and velocities:
  * the centre moves with the mean velocity, the orientation is the rotation that makes the
  * constraint displacement exert zero torque about the old positions; the new velocities are
- * the displacement's over h. The new positions are the body's reference geometry in its
+ * the displacement's over h. The torque condition reads of the velocities only the angular
+ * momentum about the centre, so one loop (gatherBody) reads the body before its positions
+ * and velocities are written. The new positions are the body's reference geometry in its
  * orientation (turnOrientation), so the shape is re-imposed every step as SETTLE does and
- * float round-off cannot random-walk it. Positions are taken relative to
- * the body's first atom so that a body far from the origin loses no digits. Returns false if
- * no rotation was found.
+ * float round-off cannot random-walk it. Returns false if no rotation was found.
  */
 DEVICE bool resetBody(int body, int start, int end, GLOBAL const int* RESTRICT bodyAtoms, GLOBAL mixed4* RESTRICT reference,
         GLOBAL mixed* RESTRICT orientation, int shape, mixed h, GLOBAL real4* RESTRICT posq,
         GLOBAL real4* RESTRICT posqCorrection, GLOBAL mixed4* RESTRICT velm) {
-    mixed3 origin, center, V;
-    bodyCenterAndVelocity(start, end, bodyAtoms, posq, posqCorrection, velm, &origin, &center, &V);
-    if (!(dot(V, V) <= FINITE_BOUND && dot(center, center) <= FINITE_BOUND))
-        return false;  // inf or NaN
-    Matrix3 delta = zeroMatrix();
-    const bool converged = shape == SHAPE_POINT || (shape == SHAPE_GENERAL ?
-            solveBodyRotation(start, end, bodyAtoms, posq, posqCorrection, velm, origin, center, V, h, &delta) :
-            solveLinearBodyRotation(start, end, bodyAtoms, posq, posqCorrection, velm, origin, center, V, h, &delta));
-    if (!converged)
-        return false;
 #ifdef REBUILD_SHAPES
     const bool fitted = (shape != SHAPE_POINT);
 #else
     const bool fitted = false;  // double precision: no round-off worth rebuilding from
 #endif
+    const Matrix3 oldOrientation = (fitted ? loadOrientation(orientation, body) : zeroMatrix());
+    const BodySums sums = gatherBody(start, end, bodyAtoms, posq, posqCorrection, velm, fitted, reference, oldOrientation);
+    const mixed3 origin = sums.origin, center = sums.center, V = sums.V;
+    if (!(dot(V, V) <= FINITE_BOUND && dot(center, center) <= FINITE_BOUND))
+        return false;  // inf or NaN
+    Matrix3 delta = zeroMatrix();
+    const bool converged = shape == SHAPE_POINT || (shape == SHAPE_GENERAL ?
+            solveRotation(sums.J, h*sums.L, &delta) :
+            solveLinearBodyRotation(start, end, bodyAtoms, posq, posqCorrection, velm, origin, center, V, h, &delta));
+    if (!converged)
+        return false;
+    const bool stale = !(sums.shapeError <= STALE_REFERENCE*STALE_REFERENCE);
     const Matrix3 rotation = (fitted ? turnOrientation(body, start, end, bodyAtoms, reference, orientation, posq,
-                                                       posqCorrection, origin, center, delta) : delta);
+                                                       posqCorrection, oldOrientation, stale, origin, center, delta) : delta);
     const mixed3 shift = h*V;
     const mixed3 newCenter = origin + (center + shift);
     const mixed invH = 1/h;
