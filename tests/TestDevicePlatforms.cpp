@@ -391,7 +391,7 @@ System stripSystem() {
 } // namespace
 
 TEST_P(DevicePlatform, AFailureInsideStepNIsFoundLateAndUndoneExactly) {
-    // The device checks the failure flag one step late and at the end of step(n): a run of
+    // The device checks the failure flag lazily (every 16 steps) and at the end of step(n): a run of
     // step(300) that fails at about step 100 must end exactly as step(1) calls do just
     // before the failing step (positions, velocities, time, step count), and raise.
     System system = stripSystem();

@@ -54,7 +54,7 @@ public:
      * atom gets fresh thermal velocities as a whole), then the forces unless forcesAreValid.
      * endStep advances time and step count. A step that fails throws an OpenMMException
      * naming the integrator (IntegratorName()), from this execute(), a later one of the same
-     * step(n) call, or finishSteps() (the device platforms find a failure one step late), and
+     * step(n) call, or finishSteps() (the device platforms find a failure lazily), and
      * leaves positions, velocities, box, time and step count as they were before that step.
      *
      * forcesAreValid -- in: the Context's forces are those at the current positions for the

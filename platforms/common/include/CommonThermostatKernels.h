@@ -21,7 +21,7 @@ std::string thermostatSources();
  * scales, so no step reads anything back to the host. The first half step of each step
  * changes the state before the step's first pass, so it makes the step's backup (the atoms'
  * and the thermostat's) while the failure flag is clear, and CommonStepFailure puts both
- * back when a step fails (found one step late).
+ * back when a step fails (found lazily).
  * A subclass supplies the half step and the state.
  */
 template <class StepKernel>

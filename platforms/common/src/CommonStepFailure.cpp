@@ -79,9 +79,12 @@ int CommonStepFailure::stepStarted(ContextImpl& context, double size) {
 void CommonStepFailure::stepQueued() {
     if (!deferred.empty())
         synchronize();
+    if (++stepsSinceCopy < CopyInterval)
+        return;
+    stepsSinceCopy = 0;
     int* hint = (int*) cc.getPinnedBuffer();
     if (copyQueued) {
-        // The previous step's flag: the device has this step still queued, so it stays busy.
+        // The last copy's flag: the device has the steps since still queued, so it stays busy.
         copied->wait();
         copyQueued = false;
         if (hint[0] != 0)
