@@ -26,7 +26,7 @@
 #define GROUP_FREE 2
 
 /** RATTLE's velocity step for a cluster of free constraints; false if it did not converge. */
-DEVICE bool projectCluster(int kind, int index, GLOBAL const int* RESTRICT clusterStart,
+INLINE_DEVICE bool projectCluster(int kind, int index, GLOBAL const int* RESTRICT clusterStart,
         GLOBAL const int2* RESTRICT constraintAtoms, mixed tolerance, GLOBAL const real4* RESTRICT posq,
         GLOBAL const real4* RESTRICT posqCorrection, GLOBAL mixed4* RESTRICT velm) {
     if (kind != GROUP_CLUSTER)
@@ -35,30 +35,46 @@ DEVICE bool projectCluster(int kind, int index, GLOBAL const int* RESTRICT clust
                          tolerance);
 }
 
+/** The backup (if asked for) and the kick (if kickScale != 0) of a group's atoms; false if a kicked velocity is not finite. */
+INLINE_DEVICE bool backupAndKick(int start, int end, GLOBAL const int* RESTRICT atoms, bool backup,
+        GLOBAL real4* RESTRICT posq, GLOBAL real4* RESTRICT posqCorrection, GLOBAL mixed4* RESTRICT velm,
+        GLOBAL real4* RESTRICT posqBackup, GLOBAL real4* RESTRICT correctionBackup, GLOBAL mixed4* RESTRICT velmBackup,
+        mixed kickScale, GLOBAL const mm_long* RESTRICT force, int paddedNumAtoms) {
+    bool ok = true;
+    for (int k = start; k < end; k++) {
+        const int atom = atoms[k];
+        if (backup)
+            backupAtom(atom, posq, posqCorrection, velm, posqBackup, correctionBackup, velmBackup);
+        if (kickScale != 0)
+            ok = kickAtom(atom, kickScale, force, paddedNumAtoms, velm) && ok;
+    }
+    return ok;
+}
+
+/** Langevin's noise for a group's atoms. */
+INLINE_DEVICE void noiseGroup(int start, int end, GLOBAL const int* RESTRICT atoms, mixed noiseDecay, mixed noiseScale,
+        GLOBAL const float4* RESTRICT random, unsigned int randomIndex, GLOBAL mixed4* RESTRICT velm) {
+    for (int k = start; k < end; k++)
+        noiseAtom(atoms[k], noiseDecay, noiseScale, random, randomIndex, velm);
+}
+
 /** A pass's phases for one body (the backup and the kick a loop of their own, then one loop per projection or reset). */
-DEVICE bool advanceBody(int body, int start, int end, GLOBAL const int* RESTRICT bodyAtoms, int shape,
+INLINE_DEVICE bool advanceBody(int body, int start, int end, GLOBAL const int* RESTRICT bodyAtoms, int shape,
         GLOBAL mixed4* RESTRICT reference, GLOBAL mixed* RESTRICT orientation, GLOBAL real4* RESTRICT posq,
         GLOBAL real4* RESTRICT posqCorrection, GLOBAL mixed4* RESTRICT velm, GLOBAL const mm_long* RESTRICT force,
         int paddedNumAtoms, bool backup, GLOBAL real4* RESTRICT posqBackup, GLOBAL real4* RESTRICT correctionBackup,
         GLOBAL mixed4* RESTRICT velmBackup, mixed kickScale, bool projectAfterKick, mixed driftTime, mixed noiseDecay,
         mixed noiseScale, GLOBAL const float4* RESTRICT random, unsigned int randomIndex, bool projectAtEnd,
         bool resetFollows) {
-    bool ok = true;
-    for (int k = start; k < end; k++) {
-        const int atom = bodyAtoms[k];
-        if (backup)
-            backupAtom(atom, posq, posqCorrection, velm, posqBackup, correctionBackup, velmBackup);
-        if (kickScale != 0)
-            ok = kickAtom(atom, kickScale, force, paddedNumAtoms, velm) && ok;
-    }
+    bool ok = backupAndKick(start, end, bodyAtoms, backup, posq, posqCorrection, velm, posqBackup, correctionBackup,
+                            velmBackup, kickScale, force, paddedNumAtoms);
     if (driftTime != 0)  // no projection before the reset: see above
         ok = resetBody(body, start, end, bodyAtoms, reference, orientation, shape, driftTime, posq, posqCorrection,
                        velm) && ok;
     else if (projectAfterKick)
         projectBody(start, end, bodyAtoms, shape, posq, posqCorrection, velm, false);
     if (noiseScale != 0) {
-        for (int k = start; k < end; k++)
-            noiseAtom(bodyAtoms[k], noiseDecay, noiseScale, random, randomIndex, velm);
+        noiseGroup(start, end, bodyAtoms, noiseDecay, noiseScale, random, randomIndex, velm);
         if (!resetFollows)
             projectBody(start, end, bodyAtoms, shape, posq, posqCorrection, velm, false);
     }
@@ -110,20 +126,15 @@ KERNEL void advanceGroups(int numBodies, int numClusters, int numFree, GLOBAL co
             end = index + 1;
             atoms = freeAtoms;
         }
-        bool ok = true;
+        bool ok;
         if (kind == GROUP_BODY)
             ok = advanceBody(index, start, end, atoms, bodyShape[index], bodyReference, bodyOrientation, posq,
                              posqCorrection, velm, force, paddedNumAtoms, backupStepIndex >= 0, posqBackup,
                              correctionBackup, velmBackup, kickScale, projectAfterKick != 0, driftTime, noiseDecay,
                              noiseScale, random, randomIndex, projectAtEnd != 0, resetFollows != 0);
         else {
-            for (int k = start; k < end; k++) {
-                const int atom = atoms[k];
-                if (backupStepIndex >= 0)
-                    backupAtom(atom, posq, posqCorrection, velm, posqBackup, correctionBackup, velmBackup);
-                if (kickTime != 0)
-                    ok = kickAtom(atom, kickScale, force, paddedNumAtoms, velm) && ok;
-            }
+            ok = backupAndKick(start, end, atoms, backupStepIndex >= 0, posq, posqCorrection, velm, posqBackup,
+                               correctionBackup, velmBackup, kickScale, force, paddedNumAtoms);
             if (projectAfterKick)
                 ok = projectCluster(kind, index, clusterStart, constraintAtoms, tolerance, posq, posqCorrection, velm) && ok;
             if (driftTime != 0) {
@@ -134,8 +145,7 @@ KERNEL void advanceGroups(int numBodies, int numClusters, int numFree, GLOBAL co
                     driftAtom(atoms[start], driftTime, posq, posqCorrection, velm);
             }
             if (noiseScale != 0) {
-                for (int k = start; k < end; k++)
-                    noiseAtom(atoms[k], noiseDecay, noiseScale, random, randomIndex, velm);
+                noiseGroup(start, end, atoms, noiseDecay, noiseScale, random, randomIndex, velm);
                 ok = projectCluster(kind, index, clusterStart, constraintAtoms, tolerance, posq, posqCorrection, velm) && ok;
             }
             if (projectAtEnd)

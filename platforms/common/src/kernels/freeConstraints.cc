@@ -12,7 +12,7 @@
  * h v, SHAKE iterates along the old bond vectors, then positions and velocities are written
  * from the constrained displacement. Returns false if it did not converge.
  */
-DEVICE bool shakeCluster(int constraintStart, int constraintEnd, GLOBAL const int2* RESTRICT constraintAtoms,
+INLINE_DEVICE bool shakeCluster(int constraintStart, int constraintEnd, GLOBAL const int2* RESTRICT constraintAtoms,
         GLOBAL const mixed* RESTRICT constraintDistance, int atomStart, int atomEnd,
         GLOBAL const int* RESTRICT clusterAtoms, mixed h, mixed tolerance, GLOBAL real4* RESTRICT posq,
         GLOBAL real4* RESTRICT posqCorrection, GLOBAL mixed4* RESTRICT velm, GLOBAL mixed4* RESTRICT posDelta) {
@@ -57,7 +57,7 @@ DEVICE bool shakeCluster(int constraintStart, int constraintEnd, GLOBAL const in
  * rate of change is below the tolerance (relative to its length). Returns false if it did
  * not converge.
  */
-DEVICE bool rattleCluster(int constraintStart, int constraintEnd, GLOBAL const int2* RESTRICT constraintAtoms,
+INLINE_DEVICE bool rattleCluster(int constraintStart, int constraintEnd, GLOBAL const int2* RESTRICT constraintAtoms,
         GLOBAL const real4* RESTRICT posq, GLOBAL const real4* RESTRICT posqCorrection, GLOBAL mixed4* RESTRICT velm,
         mixed tolerance) {
     bool converged = false;

@@ -15,7 +15,7 @@ typedef struct {
  * v_i = V + w x a_i with w = I^-1 L (in the plane normal to the axis for a linear body), from
  * what gatherBody summed of them.
  */
-DEVICE RigidMotion rigidMotionOf(BodySums sums, int start, int end, GLOBAL const int* RESTRICT bodyAtoms, int shape,
+INLINE_DEVICE RigidMotion rigidMotionOf(BodySums sums, int start, int end, GLOBAL const int* RESTRICT bodyAtoms, int shape,
         GLOBAL const real4* RESTRICT posq, GLOBAL const real4* RESTRICT posqCorrection) {
     RigidMotion motion;
     motion.origin = sums.origin;
@@ -47,14 +47,14 @@ DEVICE RigidMotion rigidMotionOf(BodySums sums, int start, int end, GLOBAL const
 }
 
 /** The rigid motion of a body's velocities. */
-DEVICE RigidMotion rigidMotion(int start, int end, GLOBAL const int* RESTRICT bodyAtoms, int shape,
+INLINE_DEVICE RigidMotion rigidMotion(int start, int end, GLOBAL const int* RESTRICT bodyAtoms, int shape,
         GLOBAL const real4* RESTRICT posq, GLOBAL const real4* RESTRICT posqCorrection, GLOBAL mixed4* RESTRICT velm) {
     const BodySums sums = gatherBody(start, end, bodyAtoms, posq, posqCorrection, velm, false, velm, zeroMatrix());
     return rigidMotionOf(sums, start, end, bodyAtoms, shape, posq, posqCorrection);
 }
 
 /** How far a body's velocities are from their rigid motion: *residual is the largest |v_i - rigid_i|^2, *scale the largest |rigid_i|^2. */
-DEVICE void rigidResidual(RigidMotion motion, int start, int end, GLOBAL const int* RESTRICT bodyAtoms,
+INLINE_DEVICE void rigidResidual(RigidMotion motion, int start, int end, GLOBAL const int* RESTRICT bodyAtoms,
         GLOBAL const real4* RESTRICT posq, GLOBAL const real4* RESTRICT posqCorrection,
         GLOBAL const mixed4* RESTRICT velm, mixed* residual, mixed* scale) {
     *scale = 0;
@@ -70,7 +70,7 @@ DEVICE void rigidResidual(RigidMotion motion, int start, int end, GLOBAL const i
 }
 
 /** Replace a body's velocities by its rigid motion. */
-DEVICE void setRigidVelocities(RigidMotion motion, int start, int end, GLOBAL const int* RESTRICT bodyAtoms,
+INLINE_DEVICE void setRigidVelocities(RigidMotion motion, int start, int end, GLOBAL const int* RESTRICT bodyAtoms,
         GLOBAL const real4* RESTRICT posq, GLOBAL const real4* RESTRICT posqCorrection, GLOBAL mixed4* RESTRICT velm) {
     for (int k = start; k < end; k++) {
         const int atom = bodyAtoms[k];
@@ -84,7 +84,7 @@ DEVICE void setRigidVelocities(RigidMotion motion, int start, int end, GLOBAL co
  * Replace one body's velocities by their rigid-body projection. With onlyIfNotRigid,
  * velocities already rigid to round-off (RIGID_TOLERANCE) are left exactly as they are.
  */
-DEVICE void projectBody(int start, int end, GLOBAL const int* RESTRICT bodyAtoms, int shape,
+INLINE_DEVICE void projectBody(int start, int end, GLOBAL const int* RESTRICT bodyAtoms, int shape,
         GLOBAL const real4* RESTRICT posq, GLOBAL const real4* RESTRICT posqCorrection, GLOBAL mixed4* RESTRICT velm,
         bool onlyIfNotRigid) {
     const RigidMotion motion = rigidMotion(start, end, bodyAtoms, shape, posq, posqCorrection, velm);

@@ -12,7 +12,7 @@
  * linearised answer I^-1 target / 2, keeping the Jacobian (chord steps) once the correction
  * is below CHORD_SWITCH of w. Returns true and P - 1 in *delta if it converged.
  */
-DEVICE bool solveRotation(Matrix3 J, mixed3 target, Matrix3* delta) {
+INLINE_DEVICE bool solveRotation(Matrix3 J, mixed3 target, Matrix3* delta) {
     const mixed traceJ = J.m00 + J.m11 + J.m22;
     const Matrix3 I = inertiaOf(J, traceJ);
     const mixed3 t = make_mixed3(0.5f*target.x, 0.5f*target.y, 0.5f*target.z);
@@ -68,7 +68,7 @@ DEVICE bool solveRotation(Matrix3 J, mixed3 target, Matrix3* delta) {
  * P - 1 of a linear body's reset, in closed form: u x (j p - w) = 0 with p = P u, spin about the
  * axis no degree of freedom, P the smallest rotation taking u to p.
  */
-DEVICE bool solveLinearBodyRotation(int start, int end, GLOBAL const int* RESTRICT bodyAtoms,
+INLINE_DEVICE bool solveLinearBodyRotation(int start, int end, GLOBAL const int* RESTRICT bodyAtoms,
         GLOBAL const real4* RESTRICT posq, GLOBAL const real4* RESTRICT posqCorrection,
         GLOBAL const mixed4* RESTRICT newVelocity, mixed3 origin, mixed3 center, mixed3 V, mixed h, Matrix3* delta) {
     *delta = zeroMatrix();

@@ -7,7 +7,7 @@
  */
 
 /** Write a position in the storage's precision (mixed: a float and its correction). */
-DEVICE void storePosition(GLOBAL real4* RESTRICT posq, GLOBAL real4* RESTRICT posqCorrection, int atom, mixed3 pos) {
+INLINE_DEVICE void storePosition(GLOBAL real4* RESTRICT posq, GLOBAL real4* RESTRICT posqCorrection, int atom, mixed3 pos) {
     const real4 p = posq[atom];
 #ifdef USE_MIXED_PRECISION
     posq[atom] = make_real4((real) pos.x, (real) pos.y, (real) pos.z, p.w);
@@ -18,7 +18,7 @@ DEVICE void storePosition(GLOBAL real4* RESTRICT posq, GLOBAL real4* RESTRICT po
 }
 
 /** Copy an atom's state into the step's backup (put back if the step fails). */
-DEVICE void backupAtom(int atom, GLOBAL const real4* RESTRICT posq, GLOBAL const real4* RESTRICT posqCorrection,
+INLINE_DEVICE void backupAtom(int atom, GLOBAL const real4* RESTRICT posq, GLOBAL const real4* RESTRICT posqCorrection,
         GLOBAL const mixed4* RESTRICT velm, GLOBAL real4* RESTRICT posqBackup, GLOBAL real4* RESTRICT correctionBackup,
         GLOBAL mixed4* RESTRICT velmBackup) {
     posqBackup[atom] = posq[atom];
@@ -29,7 +29,7 @@ DEVICE void backupAtom(int atom, GLOBAL const real4* RESTRICT posq, GLOBAL const
 }
 
 /** A kick of one atom's velocity with the Context's forces; false if the velocity is then not finite. */
-DEVICE bool kickAtom(int atom, mixed scale, GLOBAL const mm_long* RESTRICT force, int paddedNumAtoms,
+INLINE_DEVICE bool kickAtom(int atom, mixed scale, GLOBAL const mm_long* RESTRICT force, int paddedNumAtoms,
         GLOBAL mixed4* RESTRICT velm) {
     mixed4 velocity = velm[atom];
     if (velocity.w == 0)
@@ -40,7 +40,7 @@ DEVICE bool kickAtom(int atom, mixed scale, GLOBAL const mm_long* RESTRICT force
 }
 
 /** A free atom's drift over h. */
-DEVICE void driftAtom(int atom, mixed h, GLOBAL real4* RESTRICT posq, GLOBAL real4* RESTRICT posqCorrection,
+INLINE_DEVICE void driftAtom(int atom, mixed h, GLOBAL real4* RESTRICT posq, GLOBAL real4* RESTRICT posqCorrection,
         GLOBAL const mixed4* RESTRICT velm) {
     const mixed4 v = velm[atom];
     if (v.w == 0)
@@ -50,7 +50,7 @@ DEVICE void driftAtom(int atom, mixed h, GLOBAL real4* RESTRICT posq, GLOBAL rea
 }
 
 /** Langevin's Ornstein-Uhlenbeck step of one atom: v = a v + sqrt((1 - a^2) kT / m) g (noiseScale = sqrt((1 - a^2) kT)). */
-DEVICE void noiseAtom(int atom, mixed a, mixed noiseScale, GLOBAL const float4* RESTRICT random, unsigned int randomIndex,
+INLINE_DEVICE void noiseAtom(int atom, mixed a, mixed noiseScale, GLOBAL const float4* RESTRICT random, unsigned int randomIndex,
         GLOBAL mixed4* RESTRICT velm) {
     const mixed4 v = velm[atom];
     if (v.w == 0)
@@ -61,7 +61,7 @@ DEVICE void noiseAtom(int atom, mixed a, mixed noiseScale, GLOBAL const float4* 
 }
 
 /** (R + R^-T) / 2: a step of Newton's iteration for the polar factor (the nearest rotation) of R. */
-DEVICE Matrix3 polarStep(Matrix3 R) {
+INLINE_DEVICE Matrix3 polarStep(Matrix3 R) {
     Matrix3 inverse;
     if (!inverse3(R, &inverse))
         return R;
@@ -73,7 +73,7 @@ DEVICE Matrix3 polarStep(Matrix3 R) {
 }
 
 /** A body's orientation (9 numbers from orientation[9*body]). */
-DEVICE Matrix3 loadOrientation(GLOBAL const mixed* RESTRICT orientation, int body) {
+INLINE_DEVICE Matrix3 loadOrientation(GLOBAL const mixed* RESTRICT orientation, int body) {
     GLOBAL const mixed* q = orientation + 9*body;
     Matrix3 Q;
     Q.m00 = q[0]; Q.m01 = q[1]; Q.m02 = q[2];
@@ -82,7 +82,7 @@ DEVICE Matrix3 loadOrientation(GLOBAL const mixed* RESTRICT orientation, int bod
     return Q;
 }
 
-DEVICE void storeOrientation(GLOBAL mixed* RESTRICT orientation, int body, Matrix3 Q) {
+INLINE_DEVICE void storeOrientation(GLOBAL mixed* RESTRICT orientation, int body, Matrix3 Q) {
     GLOBAL mixed* q = orientation + 9*body;
     q[0] = Q.m00; q[1] = Q.m01; q[2] = Q.m02;
     q[3] = Q.m10; q[4] = Q.m11; q[5] = Q.m12;
@@ -97,7 +97,7 @@ DEVICE void storeOrientation(GLOBAL mixed* RESTRICT orientation, int body, Matri
  * shape is not Q ref (stale: something else moved it, e.g. another integrator of a
  * CompoundIntegrator), its positions a about its centre become its reference, Q = 1.
  */
-DEVICE Matrix3 turnOrientation(int body, int start, int end, GLOBAL const int* RESTRICT bodyAtoms,
+INLINE_DEVICE Matrix3 turnOrientation(int body, int start, int end, GLOBAL const int* RESTRICT bodyAtoms,
         GLOBAL mixed4* RESTRICT reference, GLOBAL mixed* RESTRICT orientation, GLOBAL const real4* RESTRICT posq,
         GLOBAL const real4* RESTRICT posqCorrection, Matrix3 Q, bool stale, mixed3 origin, mixed3 center, Matrix3 delta) {
     if (stale) {
@@ -125,7 +125,7 @@ DEVICE Matrix3 turnOrientation(int body, int start, int end, GLOBAL const int* R
  * orientation (turnOrientation), so the shape is re-imposed every step as SETTLE does and
  * float round-off cannot random-walk it. Returns false if no rotation was found.
  */
-DEVICE bool resetBody(int body, int start, int end, GLOBAL const int* RESTRICT bodyAtoms, GLOBAL mixed4* RESTRICT reference,
+INLINE_DEVICE bool resetBody(int body, int start, int end, GLOBAL const int* RESTRICT bodyAtoms, GLOBAL mixed4* RESTRICT reference,
         GLOBAL mixed* RESTRICT orientation, int shape, mixed h, GLOBAL real4* RESTRICT posq,
         GLOBAL real4* RESTRICT posqCorrection, GLOBAL mixed4* RESTRICT velm) {
 #ifdef REBUILD_SHAPES
