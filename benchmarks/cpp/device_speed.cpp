@@ -30,7 +30,8 @@
  * (size, System) group as its own process under a hard time limit (scripts/gpu-check.sh).
  * --plugins: the plugin's device kernel libraries to load (default: those of this build).
  * OpenMM's platforms come from OPENMM_PLUGIN_DIR, else the build's OpenMM plugin folder.
- * Timings go to --out (default stdout), the targets to --ratios (default stderr), as CSV.
+ * Timings go to --out (default stdout), the targets to --ratios (default stderr), as CSV; each
+ * ratio of medians comes with the paired ratio of adjacent batches and its 95% interval.
  * Exit status 2 if a run diverged or lost its geometry, 3 if the platform or the plugin's
  * kernels on it are not there, 4 if the budget left a group out.
  */
@@ -291,6 +292,29 @@ double geometryError(const vector<Vec3>& positions) {
     return worst;
 }
 
+/** The geometric mean of the ratios of batches timed one after the other, and its 95% interval. */
+struct PairedRatio {
+    double ratio, low, high;
+};
+
+/**
+ * a's batch times over b's, batch by batch (adjacent in time, so they share the machine's
+ * state): exp(mean log ratio) and exp(mean +- 2 standard errors); inverted for ns/day.
+ * The interval is what a ratio of one run can claim on a noisy machine.
+ */
+PairedRatio pairedRatio(const vector<double>& a, const vector<double>& b, bool invert) {
+    const size_t n = std::min(a.size(), b.size());
+    double sum = 0, sumSquares = 0;
+    for (size_t r = 0; r < n; r++) {
+        const double x = std::log(a[r] / b[r]) * (invert ? -1 : 1);
+        sum += x;
+        sumSquares += x * x;
+    }
+    const double mean = sum / n;
+    const double error = n > 1 ? std::sqrt(std::max(0.0, sumSquares / n - mean * mean) / (n - 1)) : INFINITY;
+    return {std::exp(mean), std::exp(mean - 2 * error), std::exp(mean + 2 * error)};
+}
+
 bool havePlatform(const string& name) {
     for (int i = 0; i < Platform::getNumPlatforms(); i++)
         if (Platform::getPlatform(i).getName() == name)
@@ -333,7 +357,7 @@ int main(int argc, char** argv) {
         std::ostream& ratios = csv.ratios;
         out << "platform,device,precision,system,waters,atoms,integrator,steps_per_batch,batches,sync_ms,"
                "median_ms_per_step,min_ms_per_step,max_ms_per_step,ns_per_day,geometry_error_nm,finite\n";
-        ratios << "system,atoms,measure,value,target,met\n";
+        ratios << "system,atoms,measure,value,target,met,paired_ratio,ci95_low,ci95_high\n";
         const vector<string> names = {"verlet_settle", "mrattle", "langevin_settle", "mrattle_langevin"};
         bool allGood = true, skipped = false;
         string device = "?";
@@ -385,10 +409,12 @@ int main(int argc, char** argv) {
                     for (size_t i = 0; i < runs.size(); i++)
                         runs[i].secondsPerStep.push_back(timeBatch(runs[i], runs[i].steps, sync[i]));
                 std::map<string, double> medianSeconds;
+                std::map<string, const vector<double>*> batchSeconds;
                 for (size_t i = 0; i < runs.size(); i++) {
                     Run& run = runs[i];
                     const double m = median(run.secondsPerStep);
                     medianSeconds[run.name] = m;
+                    batchSeconds[run.name] = &run.secondsPerStep;
                     auto range = std::minmax_element(run.secondsPerStep.begin(), run.secondsPerStep.end());
                     State state = run.context->getState(State::Positions | State::Energy);
                     const double error = geometryError(state.getPositions());
@@ -412,8 +438,10 @@ int main(int argc, char** argv) {
                     const string measure = string(pair.first) + (pme ? " ns/day over " : " time per step over ") + pair.second;
                     const double value = pme ? 1 / ratio : ratio;
                     const bool met = pme ? value >= 0.95 : value <= 1.2;
+                    const PairedRatio paired = pairedRatio(*batchSeconds[pair.first], *batchSeconds[pair.second], pme);
                     ratios << systemName << "," << atoms << "," << measure << "," << std::setprecision(3) << value
-                           << "," << (pme ? ">= 0.95" : "<= 1.2") << "," << (met ? "yes" : "no") << std::endl;
+                           << "," << (pme ? ">= 0.95" : "<= 1.2") << "," << (met ? "yes" : "no") << ","
+                           << paired.ratio << "," << paired.low << "," << paired.high << std::endl;
                 }
             }
         }
