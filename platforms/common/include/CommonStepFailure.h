@@ -25,8 +25,9 @@ namespace MRattlePlugin {
  * the end of every CopyInterval-th step the flag is copied into OpenMM's pinned buffer
  * behind an event, and read when the next copy is queued (the device still has the steps
  * after it queued), so a failure is found at most 2 CopyInterval steps late; the frozen
- * state and the backups wait unchanged meanwhile. OpenMM's other users may reuse the pinned buffer in between, so what is read there is only
- * a hint: a nonzero one is confirmed by a blocking read. The blocking check (synchronize())
+ * state and the backups wait unchanged meanwhile. OpenMM's other users may reuse the
+ * pinned buffer in between, so what is read there is only a hint: a nonzero one is
+ * confirmed by a blocking read. The blocking check (synchronize())
  * is made where the state can be read: at the end of each step(n), before checkpoints and
  * kinetic energies, and at reorderings (which read the state anyway). A failure found puts
  * back the state from before the failed step (positions, velocities, box, step count, time)
