@@ -156,27 +156,3 @@ TEST(RigidBodyCoordinates, LinearBodyHasTwoRotationsAndPointNone) {
     pointBody.restartAt(tiny.data(), masses.data(), true);
     EXPECT_EQ(pointBody.numVariables(), 3);
 }
-
-TEST(RigidBodyCoordinates, LargestShapeDeviationIsZeroForRigidMotionOnly) {
-    Sample s;
-    RigidBodyCoordinates body(s.atoms, s.x.data());
-    body.restartAt(s.x.data(), s.masses.data(), true);
-    vector<double> variables{0.3, -0.2, 0.1, 2.4, 0.7, -1.5}, moved = s.x;  // far turn, a reflection-free motion
-    body.place(variables.data(), 1.0, moved.data());
-    EXPECT_LT(largestShapeDeviation(s.x.data(), moved.data(), s.atoms), 1e-14);
-    // One atom moved by 2e-3 nm: a deformation of about that size, whatever the body's motion.
-    moved[3 * 2 + 1] += 2e-3;
-    const double deviation = largestShapeDeviation(s.x.data(), moved.data(), s.atoms);
-    EXPECT_GT(deviation, 5e-4);  // spread over the body by the superposition
-    EXPECT_LT(deviation, 2e-3);
-    // A mirror image is not a rigid motion.
-    vector<double> mirrored = s.x;
-    for (int i : s.atoms)
-        mirrored[3 * i] = -mirrored[3 * i];
-    EXPECT_GT(largestShapeDeviation(s.x.data(), mirrored.data(), s.atoms), 1e-2);
-    // Atoms outside the list do not count; a single atom has no shape.
-    moved = s.x;
-    moved[0] += 1.0;
-    EXPECT_LT(largestShapeDeviation(s.x.data(), moved.data(), s.atoms), 1e-15);
-    EXPECT_EQ(largestShapeDeviation(s.x.data(), moved.data(), {0}), 0.0);
-}

@@ -27,23 +27,6 @@ Vector3d centroid(const double* positions, const vector<int>& atoms) {
     return sum / atoms.size();
 }
 
-double largestShapeDeviation(const double* a, const double* b, const vector<int>& atoms) {
-    if (atoms.size() < 2)
-        return 0;
-    const Vector3d ca = centroid(a, atoms), cb = centroid(b, atoms);
-    Matrix3d covariance = Matrix3d::Zero();
-    for (int i : atoms)
-        covariance += (point(a, i) - ca) * (point(b, i) - cb).transpose();
-    Eigen::JacobiSVD<Matrix3d> svd(covariance, Eigen::ComputeFullU | Eigen::ComputeFullV);
-    Matrix3d flip = Matrix3d::Identity();
-    flip(2, 2) = (svd.matrixV() * svd.matrixU().transpose()).determinant() < 0 ? -1 : 1;
-    const Matrix3d rotation = svd.matrixV() * flip * svd.matrixU().transpose();
-    double largest = 0;
-    for (int i : atoms)
-        largest = std::max(largest, (rotation * (point(a, i) - ca) + cb - point(b, i)).norm());
-    return largest;
-}
-
 RigidBodyCoordinates::RigidBodyCoordinates(const vector<int>& atoms, const double* positions)
     : atoms(atoms), sqrtAtoms(std::sqrt((double) atoms.size())) {
     center = centroid(positions, atoms);

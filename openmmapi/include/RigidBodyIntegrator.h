@@ -4,7 +4,6 @@
 #include "RigidBodyTopology.h"
 #include "openmm/Integrator.h"
 #include "openmm/Kernel.h"
-#include "internal/BodyShapeWatch.h"
 #include "internal/RigidBodyStepState.h"
 #include "internal/windowsExportMRattle.h"
 #include <string>
@@ -173,8 +172,6 @@ private:
     RigidBodyTopology topology;
     /** Flags of the Context's state between calls (forces valid, positions set, checkpoint refused, ...). */
     RigidBodyStepState stepState;
-    /** Positions set more than once between steps must keep the bodies' shapes (a Cartesian minimizer's do not). */
-    BodyShapeWatch shapeWatch;
 };
 
 } // namespace MRattlePlugin

@@ -102,8 +102,9 @@ private:
  * C++ callers of OpenMM::LocalEnergyMinimizer::minimize() do not get this minimizer: the
  * plugin cannot intercept that call (up to OpenMM 8.4 a function of libOpenMM; from 8.5 a
  * MinimizeKernel that a plugin could only replace for every integrator). They get OpenMM's
- * Cartesian minimizer, which deforms bodies whose shapes no constraints determine; the next
- * step then throws (BodyShapeWatch). Call RigidBodyMinimizer::minimize() instead, with the
+ * Cartesian minimizer, which deforms bodies whose shapes no constraints determine; the
+ * positions it sets become the bodies' shapes, as any positions set do. Call
+ * RigidBodyMinimizer::minimize() instead, with the
  * same arguments. From Python, openmm.LocalEnergyMinimizer.minimize() (and so
  * app.Simulation.minimizeEnergy()) is this minimizer after 'import mrattle'.
  *

@@ -174,7 +174,6 @@ void RigidBodyIntegrator::initialize(ContextImpl& contextRef) {
     kernel = contextRef.getPlatform().createKernel(getStepKernelName(), contextRef);
     kernel.getAs<RigidBodyKernel>().initialize(system, topology, *this);
     stepState.reset();
-    shapeWatch.reset();
 }
 
 void RigidBodyIntegrator::cleanup() {
@@ -198,14 +197,10 @@ void RigidBodyIntegrator::stateChanged(State::DataType changed) {
     if (context == nullptr || (minimizing && changed == State::Positions))
         return;
     // OpenMM's last notification of a checkpoint load: continue as the run that wrote it.
-    if (changed == State::Energy && stepState.finishCheckpointLoad(context->getStepCount())) {
-        shapeWatch.reset();
+    if (changed == State::Energy && stepState.finishCheckpointLoad(context->getStepCount()))
         return;
-    }
-    if (changed == State::Positions) {
+    if (changed == State::Positions)
         useNewPositions();
-        shapeWatch.positionsSet(*context);
-    }
     if (changed == State::Positions || changed == State::Velocities)
         useNewVelocities(changed == State::Positions);
 }
@@ -283,7 +278,6 @@ vector<Vec3> RigidBodyIntegrator::getVelocitiesForTemperature(const System& syst
 void RigidBodyIntegrator::step(int steps) {
     requireContext();
     stepState.requireSteppable(getStepSize());
-    shapeWatch.requireShapesKept(*context, topology);
     try {
         stepLoop(steps);
         kernel.getAs<RigidBodyKernel>().finishSteps(*context);

@@ -97,6 +97,9 @@ def test_real_inputs_in_every_precision(devicePlatform, precision, pdbName, forc
         assert abs(d[0] - d[1]) < tolerance
         if oh is not None:
             assert abs(d[0] - oh.value_in_unit(unit.nanometers)) < tolerance
+    # OpenMM's most ordinary start: constraints applied after the positions (in single precision
+    # their round-off changes the waters' shapes), then a step.
+    context.applyConstraints(1e-6)
     context.setVelocitiesToTemperature(300*unit.kelvin, 3)
     integrator.step(5)
     state = context.getState(getPositions=True, getEnergy=True)

@@ -28,13 +28,6 @@ Eigen::Matrix3d leftJacobian(const Eigen::Vector3d& theta);
 Eigen::Vector3d centroid(const double* positions, const std::vector<int>& atoms);
 
 /**
- * How far the listed atoms of `b` are from those of `a` moved rigidly onto them: the largest
- * distance of an atom of b from a's shape after the superposition of least squares (equal
- * weights; Kabsch). Zero to round-off when b is a rigid motion of a. Positions: 3N arrays.
- */
-double largestShapeDeviation(const double* a, const double* b, const std::vector<int>& atoms);
-
-/**
  * One body: atom k sits at center + scale u / sqrt(n) + R(theta) base shape_k, with shape_k
  * its offset from the centroid when the coordinates were made (never changed), base the
  * rotation folded in so far and theta = axes (scale v) a rotation vector. The variables u (3)
