@@ -3,7 +3,8 @@
  * are MRattleIntegrator's; bodies stay rigid under noise; it reaches the bath temperature
  * (kinetic, with the rigid-body degrees of freedom, within its statistical error); a seed
  * fixes the noise; checkpoints restore the random stream bit for bit; bad parameters are
- * refused; it serializes; it runs inside a CompoundIntegrator with MRattleIntegrator.
+ * refused; it serializes; it runs inside a CompoundIntegrator with MRattleIntegrator; at zero
+ * temperature friction alone damps (OpenMM's single-bond test, free and rigid).
  */
 #include "MRattleLangevinIntegrator.h"
 #include "TestSupport.h"
@@ -187,6 +188,74 @@ TEST_P(Langevin, RunsInACompoundIntegratorWithMRattle) {
         compound.step(25);
     }
     EXPECT_LT(maxDistanceChange(c.positions, context->getState(State::Positions).getPositions(), c.molecules), 1e-10);
+}
+
+TEST_P(Langevin, ZeroTemperatureDampsAFreeOscillatorAsOpenMMsSingleBondTest) {
+    // OpenMM's TestLangevinMiddleIntegrator::testSingleBond: two free particles (each its own
+    // one-particle body) on a harmonic bond at T = 0 are a damped oscillator; friction alone acts.
+    System system;
+    system.addParticle(2.0);
+    system.addParticle(2.0);
+    HarmonicBondForce* bond = new HarmonicBondForce();
+    bond->addBond(0, 1, 1.5, 1);
+    system.addForce(bond);
+    MRattleLangevinIntegrator integrator(0, 0.1, 0.01);
+    integrator.addRigidBody({0});
+    integrator.addRigidBody({1});
+    std::unique_ptr<Context> context = makeContext(system, integrator);
+    context->setPositions({Vec3(-1, 0, 0), Vec3(1, 0, 0)});
+    const double freq = std::sqrt(1 - 0.05 * 0.05);
+    for (int i = 0; i < 1000; i++) {
+        const State state = context->getState(State::Positions | State::Velocities);
+        const double t = state.getTime();
+        const double distance = 1.5 + 0.5 * std::exp(-0.05 * t) * std::cos(freq * t);
+        const double speed = -0.5 * std::exp(-0.05 * t) * (0.05 * std::cos(freq * t) + freq * std::sin(freq * t));
+        ASSERT_NEAR(-0.5 * distance, state.getPositions()[0][0], 0.02) << "t = " << t;
+        ASSERT_NEAR(0.5 * distance, state.getPositions()[1][0], 0.02) << "t = " << t;
+        ASSERT_NEAR(-0.5 * speed, state.getVelocities()[0][0], 0.02) << "t = " << t;
+        ASSERT_NEAR(0.5 * speed, state.getVelocities()[1][0], 0.02) << "t = " << t;
+        integrator.step(1);
+    }
+    // The figure: particle 0's velocity after 100 steps is the same on every platform.
+    MRattleLangevinIntegrator reference(0, 0.1, 0.01);
+    reference.addRigidBody({0});
+    reference.addRigidBody({1});
+    Context onReference(system, reference, platform("Reference"));
+    onReference.setPositions({Vec3(-1, 0, 0), Vec3(1, 0, 0)});
+    context->setPositions({Vec3(-1, 0, 0), Vec3(1, 0, 0)});
+    context->setVelocities({Vec3(), Vec3()});
+    integrator.step(100);
+    reference.step(100);
+    EXPECT_NEAR(onReference.getState(State::Velocities).getVelocities()[0][0],
+                context->getState(State::Velocities).getVelocities()[0][0], 1e-9);
+}
+
+TEST_P(Langevin, ZeroTemperatureDampsASpinningRigidRotor) {
+    // The same test's rigid form: a rigid dimer spinning and drifting with no force loses its
+    // angular and linear momentum as exp(-friction t), each step's factor exp(-friction h).
+    System system;
+    system.addParticle(2.0);
+    system.addParticle(2.0);
+    const double friction = 0.1, h = 0.01;
+    MRattleLangevinIntegrator integrator(0, friction, h);
+    integrator.addRigidBody({0, 1});
+    std::unique_ptr<Context> context = makeContext(system, integrator);
+    context->setPositions({Vec3(-0.75, 0, 0), Vec3(0.75, 0, 0)});
+    context->setVelocities({Vec3(0.1, -0.5, 0), Vec3(0.1, 0.5, 0)});
+    const int steps = 500;
+    integrator.step(steps);
+    const State state = context->getState(State::Positions | State::Velocities);
+    const vector<double> m = masses(system);
+    const double decay = std::exp(-friction * h * steps);
+    const Vec3 p = totalMomentum(m, state.getVelocities());
+    const Vec3 center = (state.getPositions()[0] + state.getPositions()[1]) * 0.5;
+    vector<Vec3> relative = {state.getPositions()[0] - center, state.getPositions()[1] - center};
+    const Vec3 l = angularMomentum(m, relative, state.getVelocities());
+    EXPECT_NEAR(0.4 * decay, p[0], 1e-9);
+    EXPECT_NEAR(0, p[1], 1e-9);
+    EXPECT_NEAR(2 * 2.0 * 0.75 * 0.5 * decay, l[2], 1e-9);
+    EXPECT_NEAR(1.5, std::sqrt((state.getPositions()[1] - state.getPositions()[0]).dot(
+                                   state.getPositions()[1] - state.getPositions()[0])), 1e-9);
 }
 
 TEST(LangevinApi, RefusesBadParametersAndSerializes) {

@@ -6,8 +6,8 @@
  *
  *   backup (backupStepIndex >= 0; the index goes into failure[1]), kick (kickTime != 0),
  *   projection (projectAfterKick), drift and reset (driftTime != 0: M-RATTLE's reset for a
- *   body, SHAKE for a cluster, a drift for a free atom), Langevin noise and a projection
- *   (noiseScale != 0), projection (projectAtEnd).
+ *   body, SHAKE for a cluster, a drift for a free atom), Langevin friction and noise and a
+ *   projection (noiseDecay != 1; at zero temperature noiseScale is 0), projection (projectAtEnd).
  *
  * A body's reset reads of its velocities only its momentum and angular momentum, which its
  * projection keeps: so a body is not projected right before a reset, that of this pass's
@@ -51,7 +51,7 @@ INLINE_DEVICE bool backupAndKick(int start, int end, GLOBAL const int* RESTRICT 
     return ok;
 }
 
-/** Langevin's noise for a group's atoms. */
+/** Langevin's friction and noise for a group's atoms. */
 INLINE_DEVICE void noiseGroup(int start, int end, GLOBAL const int* RESTRICT atoms, mixed noiseDecay, mixed noiseScale,
         GLOBAL const float4* RESTRICT random, unsigned int randomIndex, GLOBAL mixed4* RESTRICT velm) {
     for (int k = start; k < end; k++)
@@ -73,7 +73,7 @@ INLINE_DEVICE bool advanceBody(int body, int start, int end, GLOBAL const int* R
                        velm) && ok;
     else if (projectAfterKick)
         projectBody(start, end, bodyAtoms, shape, posq, posqCorrection, velm, false);
-    if (noiseScale != 0) {
+    if (noiseDecay != 1) {
         noiseGroup(start, end, bodyAtoms, noiseDecay, noiseScale, random, randomIndex, velm);
         if (!resetFollows)
             projectBody(start, end, bodyAtoms, shape, posq, posqCorrection, velm, false);
@@ -144,7 +144,7 @@ KERNEL void advanceGroups(int numBodies, int numClusters, int numFree, GLOBAL co
                 else
                     driftAtom(atoms[start], driftTime, posq, posqCorrection, velm);
             }
-            if (noiseScale != 0) {
+            if (noiseDecay != 1) {
                 noiseGroup(start, end, atoms, noiseDecay, noiseScale, random, randomIndex, velm);
                 ok = projectCluster(kind, index, clusterStart, constraintAtoms, tolerance, posq, posqCorrection, velm) && ok;
             }

@@ -55,6 +55,10 @@ INLINE_DEVICE void noiseAtom(int atom, mixed a, mixed noiseScale, GLOBAL const f
     const mixed4 v = velm[atom];
     if (v.w == 0)
         return;
+    if (noiseScale == 0) {  // zero temperature: friction alone, no random numbers drawn
+        velm[atom] = make_mixed4(a*v.x, a*v.y, a*v.z, v.w);
+        return;
+    }
     const float4 g = random[randomIndex + atom];
     const mixed sigma = noiseScale*sqrt(v.w);
     velm[atom] = make_mixed4(a*v.x + sigma*g.x, a*v.y + sigma*g.y, a*v.z + sigma*g.z, v.w);
