@@ -11,6 +11,7 @@
 #include <gtest/gtest.h>
 #include <Eigen/Dense>
 #include <cmath>
+#include <random>
 
 using namespace OpenMM;
 using namespace MRattlePlugin;
@@ -159,6 +160,56 @@ TEST_P(Minimizer, ClashingStartIsResolved) {
 }
 
 INSTANTIATE_TEST_SUITE_P(AllPlatforms, Minimizer, ::testing::ValuesIn(configsOf("MRattle")), configName);
+
+TEST_P(Minimizer, HugeForcesAreResolvedOrRefusedByName) {
+    // OpenMM's TestLocalEnergyMinimizer::testLargeForces: ten charged particles within 1e-10 nm
+    // (energy ~1e120 kJ/mol); here also as five rigid dimers, 0.1 nm long, on top of each other.
+    for (bool dimers : {false, true}) {
+        System system;
+        NonbondedForce* nonbonded = new NonbondedForce();
+        system.addForce(nonbonded);
+        std::mt19937 generator(0);
+        std::uniform_real_distribution<double> uniform(0.0, 1.0);
+        vector<Vec3> positions;
+        for (int i = 0; i < 10; i++) {
+            system.addParticle(1.0);
+            nonbonded->addParticle(1.0, 0.2, 1.0);
+            positions.push_back(Vec3(uniform(generator), uniform(generator), uniform(generator)) * 1e-10);
+        }
+        vector<vector<int> > bodies;
+        std::unique_ptr<RigidBodyIntegrator> integrator = makeIntegrator(0.01);
+        if (dimers)
+            for (int b = 0; b < 5; b++) {
+                positions[b + 5] = positions[b] + Vec3(0.1, 0, 0);
+                nonbonded->addException(b, b + 5, 0, 1, 0);
+                bodies.push_back({b, b + 5});
+                integrator->addRigidBody(bodies.back());
+            }
+        std::unique_ptr<Context> context = makeContext(system, *integrator);
+        context->setPositions(positions);
+        const double start = potentialEnergy(*context);
+        const std::string why = dimers ? "dimers" : "free particles";
+        try {
+            RigidBodyMinimizer::minimize(*context, 1.0);
+        } catch (const OpenMMException& e) {
+            // Where the platform cannot compute the start (CPU's and OpenCL's single-precision
+            // nonbonded kernels overflow), it says so, as OpenMM's own minimizer does there.
+            EXPECT_NE("Reference", GetParam().platform) << "Reference computes this start: it must minimize";
+            EXPECT_FALSE(std::isfinite(start)) << why << ": " << e.what();
+            EXPECT_NE(std::string::npos, std::string(e.what()).find("not finite")) << e.what();
+            continue;
+        }
+        ASSERT_TRUE(std::isfinite(start)) << why;
+        const double end = potentialEnergy(*context);
+        EXPECT_LT(end, 1e-100 * start) << why;
+        double farthest = 0;
+        for (const Vec3& r : positionsOf(*context))
+            farthest = std::max(farthest, std::sqrt(r.dot(r)));
+        EXPECT_GT(farthest, 0.1) << why;
+        EXPECT_LT(farthest, 100.0) << why;
+        EXPECT_LT(maxDistanceChange(positions, positionsOf(*context), bodies), 1e-9) << why;
+    }
+}
 
 TEST(MinimizerReference, RigidWaterMinimumIsLocalEnergyMinimizersWithSettle) {
     // 8 rigid TIP3P waters: each minimizer, started from the other's minimum, finds nothing

@@ -77,6 +77,7 @@ bool RigidBodySearch::converged(const Point& point) const {
 
 void RigidBodySearch::restartAt(const vector<Vec3>& positions, bool resetOrientations) {
     cached.valid = false;
+    best.valid = false;
     // The variables describe moves from here: bodies at u = v = 0 about their present frame.
     int offset = 0;
     offsets.clear();
@@ -117,14 +118,25 @@ double RigidBodySearch::hostForces() {
         } catch (const OpenMMException&) {
             host = &Platform::getPlatformByName("Reference");
         }
-        hostContext.reset(new Context(system, hostIntegrator, *host));
-        hostContext->setState(context.getState(State::Positions | State::Parameters));
+        makeHostContext(*host);
     }
     hostContext->setPositions(trial);
     hostContext->computeVirtualSites();
     const State state = hostContext->getState(State::Forces | State::Energy, false, groups);
+    if (!std::isfinite(state.getPotentialEnergy()) && hostContext->getPlatform().getName() != "Reference") {
+        // The CPU platform's single-precision nonbonded kernels overflow first: Reference computes in double.
+        makeHostContext(Platform::getPlatformByName("Reference"));
+        return hostForces();
+    }
     forces = state.getForces();
     return state.getPotentialEnergy();
+}
+
+void RigidBodySearch::makeHostContext(Platform& host) {
+    hostContext.reset();
+    hostIntegrator.reset(new VerletIntegrator(1.0));
+    hostContext.reset(new Context(system, *hostIntegrator, host));
+    hostContext->setState(context.getState(State::Positions | State::Parameters));
 }
 
 double RigidBodySearch::evaluate(const double* variables, double* g) {
@@ -146,6 +158,13 @@ double RigidBodySearch::evaluate(const double* variables, double* g) {
             cached.point = last;
             cached.value = value;
             cached.valid = true;
+            if (!best.valid || value < best.value) {
+                best.variables = cached.variables;
+                best.gradient = cached.gradient;
+                best.point = last;
+                best.value = value;
+                best.valid = true;
+            }
             return value;
         } catch (const std::exception& e) {
             failure = e.what();
@@ -252,6 +271,19 @@ int RigidBodySearch::progress(const double* g) {
     return 0;
 }
 
+bool RigidBodySearch::continueFromBestTrial(int& status) {
+    const double acceptedValue = accepted.energy + accepted.springEnergy;
+    if (status >= 0 || !best.valid || !(best.value < acceptedValue - 1e-12 * std::fabs(acceptedValue)))
+        return false;
+    // The trial becomes the iterate (reported and tested as one), then a new L-BFGS search starts there.
+    std::copy(best.variables.begin(), best.variables.end(), x.get());
+    last = best.point;
+    status = progress(best.gradient.data());
+    if (status == 0)
+        status = Rebase;
+    return true;
+}
+
 void RigidBodySearch::rebase() {
     // Fold each body's rotation into its frame (composed with the rotations before: the
     // shape itself is never rotated in place) and restart about the new orientations.
@@ -302,6 +334,8 @@ void RigidBodySearch::search() {
             status = lbfgs(paddedVariables, x.get(), &value, evaluateCallback, progressCallback, this, &parameters);
             if (!failure.empty())
                 fail(failure);
+            if (continueFromBestTrial(status) && !failure.empty())
+                fail(failure);
             if (status == Rebase)
                 rebase();
             else if (status == LBFGSERR_OUTOFMEMORY || status == LBFGSERR_INVALID_N_SSE ||
@@ -321,6 +355,7 @@ void RigidBodySearch::search() {
         springConstant *= 10;
         roundIterations = 0;
         cached.valid = false;
+        best.valid = false;
         if (maxError > 100 * workingConstraintTolerance)
             restartAt(startPositions, true);  // far from valid: start again, as LocalEnergyMinimizer does
         else

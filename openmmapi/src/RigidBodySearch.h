@@ -75,6 +75,7 @@ private:
     double maxFreeConstraintError(const std::vector<OpenMM::Vec3>& positions) const;
     void setContextPositions(const std::vector<OpenMM::Vec3>& positions);
     double hostForces();
+    void makeHostContext(OpenMM::Platform& host);
     void search();
     [[noreturn]] void fail(const std::string& what);
 
@@ -86,7 +87,7 @@ private:
      * LocalEnergyMinimizer does, the forces are recomputed on the CPU (or Reference) platform.
      */
     bool clipsLargeForces = false;
-    OpenMM::VerletIntegrator hostIntegrator{1.0};
+    std::unique_ptr<OpenMM::VerletIntegrator> hostIntegrator;  // one per host Context (OpenMM binds it once)
     std::unique_ptr<OpenMM::Context> hostContext;
     const OpenMM::System& system;
     const RigidBodyTopology& topology;
@@ -119,6 +120,19 @@ private:
         Point point;
         double value = 0;
     } cached;
+    /**
+     * The lowest evaluation since the variables last changed meaning. On huge forces a line
+     * search can fail (its sufficient decrease out of reach) after a trial far below the
+     * iterate: the search goes on from that trial, as LocalEnergyMinimizer ends at its last.
+     */
+    struct {
+        bool valid = false;
+        std::vector<double> variables, gradient;
+        Point point;
+        double value = 0;
+    } best;
+    /** After a failed line search (status < 0): move to the best trial if it is lower, updating status; true if moved. */
+    bool continueFromBestTrial(int& status);
     /** Over the whole search; since the springs were last stiffened (the reporter's iteration). */
     int iterations = 0, roundIterations = 0, evaluations = 0;
     std::string failure;  // set when an evaluation found something not finite
