@@ -11,9 +11,9 @@ From one start (LangevinMiddle + SETTLE at 300 K), each method runs at 300 K:
    conserved quantity's drift (kinetic + potential + the heat bath's energy; NVE's total
    energy) and the translational and rotational temperatures (on-step velocities).
 Means carry standard errors from 10 block averages; a variance's error comes from the block
-variances. The suite's part `thermostats`; alone: benchmarks/python/thermostat_validation.py.
+variances. `./benchmarks/run.sh validate-thermostats` (validate(), below).
 
-Follow-up studies (run by thermostat_validation.py --study, reported in the same section when their CSVs
+Follow-up studies (run with --study, reported in the same section when their CSVs
 lie beside the main one): the potential energy per water at smaller steps beside LangevinMiddle + SETTLE
 (run_step_sizes: is the 2-fs difference a step-size error?), and the density under a MonteCarloBarostat
 (run_density). The translational and rotational temperatures against the step are in the equipartition
