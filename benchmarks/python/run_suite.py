@@ -42,20 +42,20 @@ def parse(argv):
     thermostats.add_argument("--methods", help="with --study step-sizes: comma-separated methods")
     thermostats.add_argument("--report-from", help="report a finished run from its CSV instead of running")
     thermostats.add_argument("--threads", type=int, default=1, help="CPU platform threads")
-    args, rest = p.parse_known_args(argv)
-    if rest and args.target not in STUDIES:
-        p.error("unrecognized arguments: %s" % " ".join(rest))
-    return args, rest
+    return p.parse_args(argv)
 
 
 def main(argv=None):
-    args, rest = parse(argv)
-    sys.path.insert(0, os.path.join(args.build, "python"))
-    sys.path.insert(0, HERE)
-    if args.target in STUDIES:
+    argv = sys.argv[1:] if argv is None else argv
+    if argv and argv[0] in STUDIES:  # every option is the study's own but --build
+        build = argv[argv.index("--build") + 1] if "--build" in argv else os.path.join(ROOT, "build")
+        rest = [a for i, a in enumerate(argv[1:], 1) if a != "--build" and (i < 2 or argv[i - 1] != "--build")]
+        sys.path[:0] = [os.path.join(build, "python"), HERE]
         import importlib
-        study = importlib.import_module("suite." + STUDIES[args.target])
-        return study.main(rest + (["--build", args.build] if "minimization" in args.target else []))
+        study = importlib.import_module("suite." + STUDIES[argv[0]])
+        return study.main(rest + (["--build", build] if "minimization" in argv[0] else []))
+    args = parse(argv)
+    sys.path[:0] = [os.path.join(args.build, "python"), HERE]
     from suite import accuracy, cost, gains, langevin, long_drift, sampling
     import report
 
@@ -193,7 +193,7 @@ def main(argv=None):
             return  # their CSV only: the section is reported from the main run's CSV with --report-from
 
     path = os.path.join(out, "results.md")
-    report.write(path, md, " ".join(sys.argv[1:] if argv is None else argv), (time.time() - started) / 60)
+    report.write(path, md, " ".join(argv), (time.time() - started) / 60)
     log("wrote %s" % path)
 
 
