@@ -193,7 +193,8 @@ def main(argv=None):
             return  # their CSV only: the section is reported from the main run's CSV with --report-from
 
     path = os.path.join(out, "results.md")
-    report.write(path, md, " ".join(argv), (time.time() - started) / 60)
+    command = [a for i, a in enumerate(argv) if a != "--build" and (i == 0 or argv[i - 1] != "--build")]
+    report.write(path, md, " ".join(command), (time.time() - started) / 60)
     log("wrote %s" % path)
 
 
