@@ -1,6 +1,7 @@
 /*
  * RigidBodyMinimizer against OpenMM's LocalEnergyMinimizer on one System, from the same
- * start (the rigid integrator's exact body shapes). Driven by benchmarks/python/minimization.py,
+ * start (the rigid integrator's exact body shapes). Driven by ./benchmarks/run.sh validate-minimization
+ * (benchmarks/python/suite/minimization.py),
  * which writes the inputs; prints one CSV row per minimizer.
  *
  *   minimize_compare SYSTEM.xml POSITIONS.txt BODIES.txt PLATFORM TOLERANCE NAME [REPEATS=3]

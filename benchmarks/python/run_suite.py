@@ -1,12 +1,16 @@
 #!/usr/bin/env python3
-"""Regenerate docs/results.md: accuracy, cost, sampling, long-run drift and user-gain benchmarks.
+"""The benchmark suite behind docs/results.md, run through its one door, ./benchmarks/run.sh TARGET:
 
-    ./benchmarks/run.sh            # full suite (about 40 minutes on 2 cores; the long drift part about 11)
-    ./benchmarks/run.sh --quick    # smoke test: tiny runs, written to a scratch folder
+    paper                   M-RATTLE against the splitting method: accuracy, cost, sampling, drift
+    gains                   liquid benzene with PME, rigid against flexible
+    validate-langevin       MRattleLangevinIntegrator against LangevinMiddle + SETTLE (also docs/results/langevin.md)
+    validate-equipartition  rigid water, translational against rotational temperature
+    validate-thermostats    Nose-Hoover chain and CSVR on rigid water [--study step-sizes|density|equipartition]
+    validate-minimization, validate-minimization-starts, validate-far-shapes   studies with options of their own
 
-Every table and plot in docs/results.md comes from one run of this script; nothing is
-typed in by hand. This file runs the parts and writes their CSVs and plots; report.py turns
-their rows into the markdown.
+--quick: tiny runs written to a scratch folder (a smoke test); --only: some parts of a target.
+Every table and plot in docs/results.md comes from these runs; report.py writes the markdown
+(a partial run replaces only its own sections, stamped).
 """
 import argparse
 import csv
@@ -16,28 +20,50 @@ import time
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 ROOT = os.path.dirname(os.path.dirname(HERE))
+TARGETS = {"paper": ("accuracy", "cost", "sampling", "drift"), "gains": ("gains",),
+           "validate-langevin": ("langevin",), "validate-equipartition": ("equipartition",),
+           "validate-thermostats": ("thermostats",)}
+STUDIES = {"validate-minimization": "minimization", "validate-minimization-starts": "minimization_starts",
+           "validate-far-shapes": "far_shapes"}  # modules of suite/ with a main(argv) of their own
 
 
-def parse():
+def parse(argv):
     p = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    p.add_argument("target", choices=sorted(TARGETS) + sorted(STUDIES))
     p.add_argument("--quick", action="store_true", help="tiny runs for CI smoke tests")
     p.add_argument("--build", default=os.path.join(ROOT, "build"), help="CMake build folder")
     p.add_argument("--out", default=None, help="output folder (default docs/, or a scratch folder with --quick)")
-    p.add_argument("--only", default=",".join(ALL_PARTS), help="comma-separated parts to run")
-    return p.parse_args()
+    p.add_argument("--only", help="comma-separated parts of the target to run")
+    thermostats = p.add_argument_group("validate-thermostats")
+    thermostats.add_argument("--study", choices=("step-sizes", "density", "equipartition"),
+                             help="a follow-up study instead of the main runs (its CSV only; equipartition: its rows)")
+    thermostats.add_argument("--steps", help="comma-separated step sizes in fs (default: the study's)")
+    thermostats.add_argument("--ps", type=float, help="the production length of each run of a study (ps)")
+    thermostats.add_argument("--methods", help="with --study step-sizes: comma-separated methods")
+    thermostats.add_argument("--report-from", help="report a finished run from its CSV instead of running")
+    thermostats.add_argument("--threads", type=int, default=1, help="CPU platform threads")
+    return p.parse_args(argv)
 
 
-def main():
-    args = parse()
-    sys.path.insert(0, os.path.join(args.build, "python"))
-    sys.path.insert(0, HERE)
+def main(argv=None):
+    argv = sys.argv[1:] if argv is None else argv
+    if argv and argv[0] in STUDIES:  # every option is the study's own but --build
+        build = argv[argv.index("--build") + 1] if "--build" in argv else os.path.join(ROOT, "build")
+        rest = [a for i, a in enumerate(argv[1:], 1) if a != "--build" and (i < 2 or argv[i - 1] != "--build")]
+        sys.path[:0] = [os.path.join(build, "python"), HERE]
+        import importlib
+        study = importlib.import_module("suite." + STUDIES[argv[0]])
+        return study.main(rest + (["--build", build] if "minimization" in argv[0] else []))
+    args = parse(argv)
+    sys.path[:0] = [os.path.join(args.build, "python"), HERE]
     from suite import accuracy, cost, gains, langevin, long_drift, sampling
     import report
 
     out = args.out or (os.path.join(args.build, "results-quick") if args.quick else os.path.join(ROOT, "docs"))
     results_dir = os.path.join(out, "results")
     os.makedirs(results_dir, exist_ok=True)
-    parts = set(args.only.split(","))
+    all_parts = TARGETS[args.target]
+    parts = set(args.only.split(",")) if args.only else set(all_parts)
     started = time.time()
 
     def log(message):
@@ -149,7 +175,10 @@ def main():
 
     if "langevin" in parts:
         log("langevin: validation against LangevinMiddle + SETTLE (water NVT, NPT; liquid benzene)")
-        md += langevin.run(q, os.path.join(results_dir, "langevin"), log)
+        section = langevin.run(q, os.path.join(results_dir, "langevin"), log)
+        with open(os.path.join(results_dir, "langevin.md"), "w") as stream:
+            stream.write("\n".join(section) + "\n")
+        md += section
 
     if "equipartition" in parts:
         log("equipartition: rigid TIP3P and SPC/E water, NVE at 0.5-4 fs (translational against rotational T)")
@@ -159,14 +188,14 @@ def main():
     if "thermostats" in parts:
         log("thermostats: Nose-Hoover chain and CSVR on rigid TIP3P water (canonical sampling, drift, diffusion)")
         from suite import thermostats
-        md += thermostats.run(q, os.path.join(results_dir, "thermostats"), log)
+        md += thermostats.validate(args, q, os.path.join(results_dir, "thermostats"), log)
+        if args.study in ("step-sizes", "density"):
+            return  # their CSV only: the section is reported from the main run's CSV with --report-from
 
     path = os.path.join(out, "results.md")
-    report.write(path, md, parts >= set(ALL_PARTS), args.only, (time.time() - started) / 60)
+    command = [a for i, a in enumerate(argv) if a != "--build" and (i == 0 or argv[i - 1] != "--build")]
+    report.write(path, md, " ".join(command), (time.time() - started) / 60)
     log("wrote %s" % path)
-
-
-ALL_PARTS = ("accuracy", "cost", "sampling", "drift", "gains", "langevin", "equipartition", "thermostats")
 
 
 def write_csv(path, rows):
@@ -185,4 +214,4 @@ def write_csv(path, rows):
 
 
 if __name__ == "__main__":
-    main()
+    sys.exit(main())

@@ -19,6 +19,7 @@ import os as _os
 import openmm as _openmm
 
 from . import _plugin_location
+from ._version import __version__  # the release, generated from CMakeLists.txt's project version
 
 
 def _loadKernelPlugin(platform, relativePath, required):

@@ -42,7 +42,8 @@ def runOn(platformName, model, makeIntegrator):
 
 
 def main():
-    print('OpenMM %s, M-RATTLE plugin from %s' % (openmm.Platform.getOpenMMVersion(), mrattle.__file__))
+    print('OpenMM %s, M-RATTLE plugin %s from %s' % (openmm.Platform.getOpenMMVersion(), mrattle.__version__,
+                                                      mrattle.__file__))
     print('Platforms with the plugin\'s kernels: %s' % ', '.join(mrattle.PLATFORMS))
     model = mrattle.models.benzeneCluster()
     failures = 0

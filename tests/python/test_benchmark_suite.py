@@ -1,16 +1,21 @@
-"""The benchmark suite's --quick mode: it runs end to end and its numbers make sense."""
+"""What keeps the benchmark suite's figures honest: its error bars and verdicts (block averages, drift
+standard errors, pooled and combined errors, fits), its degree-of-freedom count, and one quick run of the
+paper's accuracy part, whose numbers must say that M-RATTLE is RATTLE."""
 import csv
+import math
 import os
 import subprocess
 import sys
 
 import mrattle
+import pytest
 
 ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
 # The build tree's package lives in <build>/python/mrattle.
 BUILD = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(mrattle.__file__))))
 SUITE = os.path.join(ROOT, "benchmarks", "python")
 sys.path.insert(0, SUITE)  # run_suite, report and the suite package
+from suite import thermostats  # noqa: E402
 
 
 def read(path):
@@ -18,19 +23,12 @@ def read(path):
         return list(csv.DictReader(f))
 
 
-def test_quick_suite_writes_every_section(tmp_path):
-    # The cost section needs the C++ step_cost program, built unless MRATTLE_BUILD_BENCHMARKS=OFF.
-    has_step_cost = os.path.exists(os.path.join(BUILD, "benchmarks", "cpp", "step_cost"))
-    parts = "accuracy,cost,sampling,gains" if has_step_cost else "accuracy,sampling,gains"
-    subprocess.run([sys.executable, os.path.join(SUITE, "run_suite.py"), "--quick", "--build", BUILD,
-                    "--out", str(tmp_path), "--only", parts], check=True, timeout=600)
+def test_quick_accuracy_part_finds_m_rattle_is_rattle(tmp_path):
+    subprocess.run([sys.executable, os.path.join(SUITE, "run_suite.py"), "paper", "--quick", "--build", BUILD,
+                    "--out", str(tmp_path), "--only", "accuracy"], check=True, timeout=600)
     text = (tmp_path / "results.md").read_text()
-    for heading in ("## Accuracy", "## Sampling", "## What a user gains") + (("## Cost per step",) if has_step_cost else ()):
-        assert heading in text
+    assert "## Accuracy" in text and "M-RATTLE plugin %s" % mrattle.__version__ in text
     results = tmp_path / "results"
-    for png in ("accuracy_isolated_benzene.png", "accuracy_energy_vs_step.png", "sampling_histograms.png") + \
-            (("cost_step_times.png",) if has_step_cost else ()):
-        assert (results / png).stat().st_size > 1000
 
     # M-RATTLE is RATTLE: on the non-planar cluster the energy fluctuations agree.
     rows = read(results / "accuracy_energy_vs_step.csv")
@@ -58,20 +56,6 @@ def test_quick_suite_writes_every_section(tmp_path):
             assert r["failure"] == ""
             assert float(r["rigidity_nm"]) < 1e-10
 
-    # Steady-state sampling of liquid benzene: physical numbers, the P-conserved equipartition target.
-    liquid = {r["quantity"]: r for r in read(results / "sampling_liquid_comparison.csv")}
-    assert 200 < float(liquid["temperature (K)"]["M-RATTLE mean"]) < 450
-    assert abs(float(liquid["equipartition target for that ratio (P conserved)"]["M-RATTLE mean"]) - 64 / 63) < 1e-12
-
-    if has_step_cost:
-        # The cost part: issue 11's targets in one table; SETTLE water and 2 threads were timed.
-        assert "### Speed targets (issue 11)" in text
-        ratios = {r["ratio"] for r in read(results / "cost_ratios.csv")}
-        assert {"mrattle/verlet", "mrattle/verlet_settle", "verlet_ccma/mrattle", "mrattle threads 1/2"} <= ratios
-        paper = read(results / "cost_paper_systems.csv")
-        assert {r["method"] for r in paper} == {"M-RATTLE", "splitting"}
-        assert all(float(r["us_per_step"]) > 0 for r in paper)
-
     # Reversibility: the rigid-body methods return to round-off, OpenMM's constrained ones to their tolerance.
     assert "### Time reversibility" in text
     for r in read(results / "accuracy_reversibility.csv"):
@@ -79,30 +63,6 @@ def test_quick_suite_writes_every_section(tmp_path):
             assert float(r["error_after_10"]) < 1e-13, r
         elif "tolerance 1e-08" in r["method"]:
             assert float(r["error_after_10"]) > 1e-11, r
-
-
-def test_a_partial_run_replaces_only_its_own_sections():
-    import report
-    existing = "# Results\n\nintro\n\n## Cost\n\nold cost\n\n## Accuracy\n\nold accuracy\n### Sub\nold\n" \
-               "\n## Sampling\n\nold sampling\n\nTotal wall time of this run: 3.0 minutes.\n"
-    merged = report.splice_sections(existing, "\n## Accuracy\n\nnew accuracy\n\n## Extra\n\nnew extra\n", "*stamp*\n")
-    assert "old accuracy" not in merged and "### Sub" not in merged and "new accuracy" in merged
-    assert merged.index("## Cost") < merged.index("## Accuracy") < merged.index("## Sampling") < merged.index("## Extra")
-    assert "old cost" in merged and "old sampling" in merged and merged.startswith("# Results\n\nintro")
-    assert merged.count("*stamp*") == 2 and merged.index("*stamp*") > merged.index("## Accuracy")
-    assert merged.rstrip().endswith("Total wall time of this run: 3.0 minutes.")
-
-
-def test_quick_langevin_validation_writes_its_section(tmp_path):
-    subprocess.run([sys.executable, os.path.join(SUITE, "run_suite.py"), "--quick", "--build", BUILD,
-                    "--out", str(tmp_path), "--only", "langevin"], check=True, timeout=600)
-    text = (tmp_path / "results.md").read_text()
-    assert "## Langevin dynamics with M-RATTLE" in text and "density at 1 bar" in text and "liquid benzene" in text
-    rows = {r["quantity"]: r for r in read(tmp_path / "results" / "langevin.csv")}
-    # Short runs conclude nothing, but the numbers are physical.
-    assert 200 < float(rows["T"]["mrattle"]) < 400 and 200 < float(rows["T"]["settle"]) < 400
-    assert 0.8 < float(rows["density"]["mrattle"]) < 1.2
-    assert 1.5 < float(rows["gOO_peak"]["mrattle"]) < 4
 
 
 def test_drift_standard_error_covers_the_true_slope():
@@ -134,22 +94,6 @@ def test_a_rigid_step_counts_as_stable_only_within_its_error_bars():
     # 6 fs has the smaller drift but error bars too wide to show it meets 0.01 per DOF; 8 fs has none.
     assert gains.largest_stable(rows, 0.01)["step_fs"] == 4
     assert gains.largest_stable(rows, 0.001) is None
-
-
-def test_quick_long_drift_gives_finite_drifts_with_error_bars(tmp_path):
-    subprocess.run([sys.executable, os.path.join(SUITE, "run_suite.py"), "--quick", "--build", BUILD,
-                    "--out", str(tmp_path), "--only", "drift"], check=True, timeout=300)
-    text = (tmp_path / "results.md").read_text()
-    assert "## Long-run energy drift" in text and "consistent with zero within 2 standard errors" in text
-    assert (tmp_path / "results" / "long_drift.png").stat().st_size > 1000
-    rows = read(tmp_path / "results" / "long_drift.csv")
-    assert {r["method"] for r in rows} == {"M-RATTLE", "splitting"}
-    import math
-    for r in rows:
-        assert r["failure"] == ""
-        assert math.isfinite(float(r["drift_per_ns"])) and float(r["drift_error_per_ns"]) > 0, r
-        assert float(r["rigidity_nm"]) < 1e-10
-        assert 100 < float(r["temperature_K"]) < 400
 
 
 def test_departed_molecules_are_counted_around_the_cluster_that_remains():
@@ -207,31 +151,6 @@ def test_drift_verdicts_follow_the_error_bars():
     assert "splitting 4 fs seed 1 is 10.0 SE from zero" in text and "exceeds it by more than 2 SE" in text
 
 
-def test_speed_target_rows_count_what_was_met():
-    from suite import cost
-
-    def ratio(platform, k, bodies, name, value, met):
-        return {"platform": platform, "atoms_per_body": str(k), "bodies": str(bodies), "ratio": name,
-                "value": str(value), "target": "", "met": met}
-    ratios = [ratio("Reference", 3, 3000, "mrattle/verlet", 3.2, "no"),
-              ratio("Reference", 30, 3000, "mrattle/verlet", 1.4, "yes"),
-              ratio("Reference", 3, 100, "mrattle/verlet", 9.0, "no"),   # below 1000 bodies: not counted
-              ratio("CPU", 3, 3000, "mrattle threads 1/2", 1.8, "yes"),
-              ratio("CPU", 3, 1000, "mrattle threads 1/2", 1.2, "-")]   # below 3000 bodies: not counted
-    micro = [{"benchmark": "SolveResetRotation", "atoms_per_body": k, "ns_per_body": ns} for k, ns in ((3, 70), (5, 90))]
-    micro.append({"benchmark": "ProjectBodyVelocities", "atoms_per_body": 5, "ns_per_body": 35.0})
-    rows = cost.target_rows(ratios, micro, villin_ratio=0.97)
-    by_start = lambda start: [r for r in rows if r["target"].startswith(start)]
-    assert by_start("rotation solve")[0]["met"] == "no"          # 90 ns > 80
-    assert by_start("rotation solve")[0]["measured"] == "70 to 90 ns"
-    assert by_start("velocity projection")[0]["met"] == "yes"
-    reference = [r for r in by_start("M-RATTLE <= 1.5x") if "Reference" in r["target"]][0]
-    assert reference["met"] == "1 of 2" and reference["measured"] == "1.40 to 3.20"
-    assert by_start("CPU Threads=2")[0]["met"] == "yes" and by_start("CPU Threads=2")[0]["measured"] == "1.80"
-    assert by_start("villin")[0]["met"] == "no"
-    assert [r for r in by_start("rigid water") if "Reference" in r["target"]][0]["measured"] == "not run"
-
-
 def test_sampling_verdict_counts_standard_errors_of_the_difference():
     import report
     rows = [{"quantity": "a", "M-RATTLE mean": 1.0, "splitting mean": 1.5, "spread of run means": 0.5},
@@ -254,20 +173,41 @@ def test_every_method_counts_degrees_of_freedom_with_the_package():
         assert run["dof"] == 6*8 == mrattle.degreesOfFreedom(run["context"])
 
 
-def test_minimization_starts_runs_both_minimizers_from_each_start(tmp_path):
-    # Two starts at a loose tolerance: every number of the docs' table comes out and makes sense.
-    out, plot = tmp_path / "starts.csv", tmp_path / "starts.png"
-    subprocess.run([sys.executable, os.path.join(SUITE, "minimization_starts.py"), "--build", BUILD, "--starts", "2",
-                    "--tolerances", "40", "--out", str(out), "--plot", str(plot)], check=True, timeout=600)
-    rows = read(out)
-    assert [int(r["start"]) for r in rows] == [0, 1]
-    start_energy = -36024.6  # tip3p.pdb with exact waters (docs/minimization.md); moved waters start higher
-    for r in rows:
-        assert float(r["rigid_rms_force"]) <= 40
-        assert float(r["rigid_energy"]) < start_energy - 1000
-        assert float(r["openmm_energy"]) < start_energy - 1000
-        assert abs(float(r["gap"]) - (float(r["rigid_energy"]) - float(r["openmm_energy"]))) < 1e-6
-        assert float(r["matched_rigid_energy"]) < start_energy - 1000
-        assert abs(float(r["matched_gap"]) - (float(r["matched_rigid_energy"]) - float(r["openmm_energy"]))) < 1e-6
-        assert (r["openmm_end_passes_rigid_test"] == "True") == (float(r["openmm_rms_force"]) <= 40)
-    assert plot.stat().st_size > 1000
+def sampled(method, step_fs, potential, se=0.03):
+    kT = thermostats.langevin.KB * thermostats.TEMPERATURE
+    return dict(method=method, step_fs=step_fs, ps=20.0, potential_per_molecule=potential,
+                potential_per_molecule_se=se, kinetic_mean=0.5 * 5367 * kT, kinetic_mean_se=1.0)
+
+
+def test_step_size_table_is_against_langevin_middle_pooled_over_its_steps():
+    rows = [sampled('M-RATTLE CSVR', 2, -40.0), sampled('M-RATTLE Nose-Hoover chain', 2, -40.0),
+            sampled('LangevinMiddle + SETTLE', 2, -40.1), sampled('LangevinMiddle + SETTLE', 1, -40.3)]
+    md = thermostats.report_step_sizes(rows, 5367, 0.0)
+    assert '-40.200 +- 0.021 kJ/mol' in md[1]  # (-40.1 - 40.3) / 2, 0.03 / sqrt(2)
+    csvr = [line for line in md if line.startswith('| M-RATTLE CSVR | 2 |')][0]
+    assert '| 300.0 +- 0.0 |' in csvr
+    assert csvr.endswith('| +0.200 +- 0.037 (+5.4) |')
+    assert any(line.startswith('\nThe two thermostats pooled at each step') and '2 fs +0.200 +- 0.030 (+6.7 SE)' in line
+               for line in md)
+    assert thermostats.pooled(rows[:2]) == pytest.approx((-40.0, 0.03 / math.sqrt(2)))
+
+
+def test_density_table_differences():
+    rows = [dict(method='M-RATTLE Nose-Hoover chain', step_fs=2, ps=40.0, discarded_ps=4.0, density=0.990,
+                 density_se=0.003, potential_per_molecule=-40.0, potential_per_molecule_se=0.02, T=300.0, T_se=0.5),
+            dict(method='LangevinMiddle + SETTLE', step_fs=2, ps=40.0, discarded_ps=4.0, density=0.986,
+                 density_se=0.004, potential_per_molecule=-40.1, potential_per_molecule_se=0.02, T=299.0, T_se=0.5),
+            dict(method='M-RATTLE CSVR', step_fs=2, ps=40.0, discarded_ps=4.0, failure='energy not finite')]
+    md = thermostats.report_density(rows)
+    assert any(line.startswith('| M-RATTLE Nose-Hoover chain | 0.9900 +- 0.0030 | +0.0040 +- 0.0050 (+0.8) |')
+               for line in md)
+    assert any(line.startswith('| M-RATTLE CSVR | failed: energy not finite') for line in md)
+    assert thermostats.combined(rows[0], rows[1], 'density', 'density_se') == pytest.approx((0.004, 0.005, 0.8))
+
+
+def test_step_squared_fit_recovers_a_known_line():
+    points = [dict(step_fs=h, potential_per_molecule=-40.0 + 0.01 * h * h, potential_per_molecule_se=0.02)
+              for h in (0.5, 1, 2)]
+    (u0, u0_se), (c, c_se), chi2, dof = thermostats.fit_step_squared(points)
+    assert (u0, c, chi2, dof) == (pytest.approx(-40.0), pytest.approx(0.01), pytest.approx(0, abs=1e-12), 1)
+    assert 0 < u0_se < 0.02 and 0 < c_se < 0.02

@@ -9,6 +9,7 @@ def test_installation_check_passes_on_every_platform():
     result = subprocess.run([sys.executable, '-m', 'mrattle.testInstallation'], stdout=subprocess.PIPE,
                             stderr=subprocess.PIPE, universal_newlines=True, timeout=600)
     assert result.returncode == 0, result.stdout + result.stderr
+    assert 'M-RATTLE plugin %s from ' % mrattle.__version__ in result.stdout
     assert "Platforms with the plugin's kernels: " + ', '.join(mrattle.PLATFORMS) in result.stdout
     lines = [line.split() for line in result.stdout.splitlines()]
     for integrator in ('MRattleIntegrator:', 'MRattleNoseHooverIntegrator:', 'MRattleBussiIntegrator:'):

@@ -11,9 +11,9 @@ each integrator (for OpenMM's leapfrog VerletIntegrator rebuilt from its half-st
 standard errors from block averages. Asthagiri & Beck (2024) found that NVE rigid SPC/E water reaches equipartition only
 at 0.5 fs, with the rotational temperature below the translational at 1-3 fs.
 
-    /usr/bin/python3 benchmarks/python/run_suite.py --only equipartition   # or ./benchmarks/run.sh --only equipartition
+    ./benchmarks/run.sh validate-equipartition
     # the thermostats' rows alone, merged into docs/results/equipartition.csv and its section:
-    scripts/python.sh benchmarks/python/thermostat_validation.py --study equipartition --splice docs/results.md
+    ./benchmarks/run.sh validate-thermostats --study equipartition
 """
 import csv
 import math

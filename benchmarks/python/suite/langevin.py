@@ -1,5 +1,5 @@
 """Validation of MRattleLangevinIntegrator on OpenMM's own inputs, against OpenMM's
-LangevinMiddleIntegrator with SETTLE on the same System (see benchmarks/python/langevin_validation.py)."""
+LangevinMiddleIntegrator with SETTLE on the same System (`./benchmarks/run.sh validate-langevin`)."""
 import csv
 import math
 import os

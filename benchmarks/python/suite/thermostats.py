@@ -11,15 +11,16 @@ From one start (LangevinMiddle + SETTLE at 300 K), each method runs at 300 K:
    conserved quantity's drift (kinetic + potential + the heat bath's energy; NVE's total
    energy) and the translational and rotational temperatures (on-step velocities).
 Means carry standard errors from 10 block averages; a variance's error comes from the block
-variances. The suite's part `thermostats`; alone: benchmarks/python/thermostat_validation.py.
+variances. `./benchmarks/run.sh validate-thermostats` (validate(), below).
 
-Follow-up studies (run by thermostat_validation.py --study, reported in the same section when their CSVs
+Follow-up studies (run with --study, reported in the same section when their CSVs
 lie beside the main one): the potential energy per water at smaller steps beside LangevinMiddle + SETTLE
 (run_step_sizes: is the 2-fs difference a step-size error?), and the density under a MonteCarloBarostat
 (run_density). The translational and rotational temperatures against the step are in the equipartition
 table (suite/equipartition.py runs the two thermostats for TIP3P).
 """
 import csv
+import os
 import math
 import time
 
@@ -427,3 +428,32 @@ def report_density(rows):
             r['method'], r['density'], r['density_se'], versus, r['potential_per_molecule'],
             r['potential_per_molecule_se'], r['T'], r['T_se']))
     return md
+
+
+def validate(args, quick, out, log):
+    """`./benchmarks/run.sh validate-thermostats`: the main runs (or, --report-from, their CSV reported), or one
+    follow-up study (--study: step sizes and density write their CSVs, out + '_<study>.csv', which the main report
+    reads beside its own; equipartition its rows of that table). Returns the section's markdown lines."""
+    steps = [float(x) for x in args.steps.split(',')] if args.steps else None
+    extra = {'ps': args.ps} if args.ps else {}
+    if args.study == 'step-sizes':
+        if args.methods:
+            extra['methods'] = tuple(args.methods.split(','))
+        run_step_sizes(quick, out + '_step_sizes', log, args.threads, steps or STEP_SIZE_FS, **extra)
+        return []
+    if args.study == 'density':
+        run_density(quick, out + '_density', log, args.threads, **extra)
+        return []
+    if args.study == 'equipartition':
+        if args.report_from:
+            return equipartition.report(equipartition.rows_from_csv(args.report_from),
+                                        {'TIP3P': equipartition.MOLECULES, 'SPC/E': equipartition.MOLECULES}, False,
+                                        *equipartition.LENGTHS, args.threads)
+        return equipartition.run(quick, os.path.join(os.path.dirname(out), 'equipartition'), log, args.threads,
+                                 methods=equipartition.THERMOSTATS)
+    if args.report_from:
+        stem = args.report_from[:-len('.csv')]
+        beside = [rows_from_csv(stem + suffix) if os.path.exists(stem + suffix) else None
+                  for suffix in ('_step_sizes.csv', '_density.csv')]
+        return report(rows_from_csv(args.report_from), 895, False, 20.0, 2.0, 2.0, 1, 0.0, *beside)
+    return run(quick, out, log, args.threads, steps=steps)

@@ -1,4 +1,3 @@
-#!/usr/bin/env python3
 """Final energies of RigidBodyMinimizer and LocalEnergyMinimizer on tip3p.pdb from many starts.
 
 Where a minimizer stops depends on its path, and its path on round-off, so one start says
@@ -14,7 +13,7 @@ minimizer, started there, makes no iteration.
 Prints a Markdown table (means with standard errors over the starts), writes the rows to
 docs/results/minimization_starts.csv and a plot to docs/results/minimization_starts.png.
 
-    /usr/bin/python3 benchmarks/python/minimization_starts.py [--build build] [--starts 8] [--tolerances 10 5 2 1]
+    ./benchmarks/run.sh validate-minimization-starts [--build build] [--starts 8] [--tolerances 10 5 2 1]
 """
 import argparse
 import csv
@@ -22,7 +21,7 @@ import math
 import os
 import sys
 
-root = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))  # benchmarks/python/ is two below
+root = os.path.dirname(os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__)))))  # three below
 
 
 def meanAndError(values):
@@ -34,7 +33,7 @@ def meanAndError(values):
     return mean, math.sqrt(variance / n)
 
 
-def main():
+def main(argv=None):
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument('--build', default=os.path.join(root, 'build'))
     parser.add_argument('--platform', default='CPU')
@@ -44,7 +43,7 @@ def main():
     parser.add_argument('--tolerances', type=float, nargs='+', default=[10.0, 5.0, 2.0, 1.0])
     parser.add_argument('--out', default=os.path.join(root, 'docs', 'results', 'minimization_starts.csv'))
     parser.add_argument('--plot', default=os.path.join(root, 'docs', 'results', 'minimization_starts.png'))
-    args = parser.parse_args()
+    args = parser.parse_args(argv)
     sys.path.insert(0, os.path.join(args.build, 'python'))
     import numpy as np
     import openmm
@@ -137,6 +136,3 @@ def main():
     fig.savefig(args.plot, dpi=110)
     plt.close(fig)
 
-
-if __name__ == '__main__':
-    main()

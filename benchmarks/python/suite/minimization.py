@@ -1,4 +1,3 @@
-#!/usr/bin/env python3
 """RigidBodyMinimizer against OpenMM's LocalEnergyMinimizer: the comparison in docs/minimization.md.
 
 For each System it writes the System, the positions and the bodies to a scratch folder and
@@ -6,7 +5,7 @@ runs the C++ program minimize_compare (which times both minimizers from the same
 counts LocalEnergyMinimizer's iterations in a second, untimed run), then prints a Markdown
 table and writes docs/results/minimization.csv.
 
-    /usr/bin/python3 benchmarks/python/minimization.py [--build build] [--platform CPU] [--quick] [--only NAME] [--repeats 3]
+    ./benchmarks/run.sh validate-minimization [--build build] [--platform CPU] [--quick] [--only NAME] [--repeats 3]
 """
 import argparse
 import csv
@@ -16,7 +15,7 @@ import subprocess
 import sys
 import tempfile
 
-root = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))  # benchmarks/python/ is two below
+root = os.path.dirname(os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__)))))  # three below
 
 
 def cases(quick):
@@ -48,7 +47,7 @@ def cases(quick):
         'test.pdb', ['amber14-all.xml', 'amber14/tip3p.xml'], constraints=app.HBonds)
 
 
-def main():
+def main(argv=None):
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument('--build', default=os.path.join(root, 'build'))
     parser.add_argument('--platform', default='CPU')
@@ -56,7 +55,7 @@ def main():
     parser.add_argument('--only', help='the cases whose name contains this (no CSV is written)')
     parser.add_argument('--repeats', type=int, default=3, help='runs of each minimizer, alternated; the fastest counts')
     parser.add_argument('--out', default=os.path.join(root, 'docs', 'results', 'minimization.csv'))
-    args = parser.parse_args()
+    args = parser.parse_args(argv)
     sys.path.insert(0, os.path.join(args.build, 'python'))
     import openmm
     from openmm import unit
@@ -107,6 +106,3 @@ def main():
         if r['note']:
             print('- %s, %s: %s' % (r['case'], r['minimizer'], r['note']))
 
-
-if __name__ == '__main__':
-    main()

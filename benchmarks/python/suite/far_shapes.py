@@ -1,4 +1,3 @@
-#!/usr/bin/env python3
 """Water shapes far from the origin on a device platform (issue 31, item 4): OpenMM's
 tip3p.pdb (895 rigid TIP3P waters, PME, cutoff 0.9 nm) moved 30 nm from the origin along
 each axis, NVE at 2 fs from 300 K velocities, M-RATTLE against OpenMM's VerletIntegrator
@@ -9,7 +8,7 @@ SETTLE rebuilds each water from its triangle every step; M-RATTLE rebuilds each 
 its reference geometry and orientation, so neither error should grow with the run. The
 test suite's cheap form of this (27 waters, no forces) is
 DevicePlatform.WaterShapesStayExactFarFromTheOriginLikeSettle. Usage:
-    PYTHONPATH=build/python /usr/bin/python3 benchmarks/python/far_shapes.py [--steps 50000] [--out FILE.csv]
+    ./benchmarks/run.sh validate-far-shapes [--steps 50000] [--every 5000] [--precisions single,mixed] [--out FILE.csv]
 """
 import argparse
 import csv
@@ -70,13 +69,13 @@ def run(method, precision, start_positions, system, waters, steps, every):
     return rows
 
 
-def main():
+def main(argv=None):
     parser = argparse.ArgumentParser(description=__doc__.split('\n')[0])
     parser.add_argument('--steps', type=int, default=50000)
     parser.add_argument('--every', type=int, default=5000)
     parser.add_argument('--precisions', default='single,mixed')
     parser.add_argument('--out', default=None, help='CSV file for the samples')
-    args = parser.parse_args()
+    args = parser.parse_args(argv)
     if 'OpenCL' not in mrattle.DEVICE_PLATFORMS:
         sys.exit('no OpenCL kernels or no OpenCL platform: nothing to measure')
     pdb = app.PDBFile(os.path.join(os.path.dirname(app.__file__), 'data', 'tip3p.pdb'))
@@ -105,6 +104,3 @@ def main():
             writer.writeheader()
             writer.writerows(rows)
 
-
-if __name__ == '__main__':
-    main()
