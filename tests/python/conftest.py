@@ -1,4 +1,4 @@
-"""Shared fixtures of the Python tests. Run through ctest (PythonTests), which puts the
+"""Shared fixtures of the Python tests. Run through ctest (Python.<file>), which puts the
 build tree's package on PYTHONPATH."""
 import os
 
