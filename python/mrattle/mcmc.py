@@ -75,20 +75,18 @@ class _RigidBodyDynamicsMove(_mcmc.BaseIntegratorMove):
             integrator.setRandomNumberSeed(self.random_seed)
         return integrator
 
+    #: The settings stored with the move, besides BaseIntegratorMove's (a subclass adds its own).
+    _settings = ('timestep', 'collision_rate', 'rigid_bodies', 'constraint_tolerance', 'random_seed')
+
     def __getstate__(self):
         serialization = super().__getstate__()
-        serialization.update(timestep=self.timestep, collision_rate=self.collision_rate,
-                             rigid_bodies=self.rigid_bodies, constraint_tolerance=self.constraint_tolerance,
-                             random_seed=self.random_seed)
+        serialization.update((name, getattr(self, name)) for name in self._settings)
         return serialization
 
     def __setstate__(self, serialization):
         super().__setstate__(serialization)
-        self.timestep = serialization['timestep']
-        self.collision_rate = serialization['collision_rate']
-        self.rigid_bodies = serialization['rigid_bodies']
-        self.constraint_tolerance = serialization['constraint_tolerance']
-        self.random_seed = serialization['random_seed']
+        for name in self._settings:
+            setattr(self, name, serialization[name])
 
 
 class MRattleLangevinDynamicsMove(_RigidBodyDynamicsMove):
@@ -110,21 +108,11 @@ class MRattleNoseHooverDynamicsMove(_RigidBodyDynamicsMove):
         self.num_mts = num_mts
         self.num_yoshida_suzuki = num_yoshida_suzuki
 
+    _settings = _RigidBodyDynamicsMove._settings + ('chain_length', 'num_mts', 'num_yoshida_suzuki')
+
     def _make_integrator(self, temperature):
         return MRattleNoseHooverIntegrator(temperature, self.collision_rate, self.timestep, self.chain_length,
                                            self.num_mts, self.num_yoshida_suzuki)
-
-    def __getstate__(self):
-        serialization = super().__getstate__()
-        serialization.update(chain_length=self.chain_length, num_mts=self.num_mts,
-                             num_yoshida_suzuki=self.num_yoshida_suzuki)
-        return serialization
-
-    def __setstate__(self, serialization):
-        super().__setstate__(serialization)
-        self.chain_length = serialization['chain_length']
-        self.num_mts = serialization['num_mts']
-        self.num_yoshida_suzuki = serialization['num_yoshida_suzuki']
 
 
 class MRattleBussiDynamicsMove(_RigidBodyDynamicsMove):
