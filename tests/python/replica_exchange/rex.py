@@ -142,6 +142,9 @@ def blockEstimate(series, numBlocks=10):
     estimate that is low by chance, as one from 10 blocks can be, does not understate it)."""
     n = len(series)
     mean = sum(series)/n
+    if n < 2:
+        return mean, float('nan')
+    numBlocks = min(numBlocks, n)
     length = n//numBlocks
     blocks = [sum(series[b*length:(b + 1)*length])/length for b in range(numBlocks)]
     blockMean = sum(blocks)/numBlocks
