@@ -53,33 +53,75 @@ check() {
     need "libOpenCL.so"                    ocl-icd-opencl-dev exists /usr/lib/*/libOpenCL.so
     # An OpenCL device on the CPU, which the OpenCL tests use.
     need "pocl's OpenCL driver"            pocl-opencl-icd    exists /etc/OpenCL/vendors/pocl.icd
+    # Wanted, not needed: what openmmtools (from ../shared/deps) needs for the replica-exchange
+    # tests (tests/python/replica_exchange), which skip, saying why, without it. A package this
+    # release's apt sources lack, or whose install fails, gets a note, not a failure.
+    wanted=()
+    want() { local what="$1" packages="$2"; shift 2; "$@" || wanted+=("$packages  ($what)"); }
+    want "$python: import scipy"           python3-scipy      imports scipy
+    want "$python: import yaml"            python3-yaml       imports yaml
+    want "$python: import netCDF4"         python3-netcdf4    imports netCDF4
+    want "$python: import mdtraj"          python3-mdtraj     imports mdtraj
+    want "$python: import pymbar"          python3-pymbar     imports pymbar
+    want "$python: import numba"           python3-numba      imports numba
+    want "$python: import mpi4py"          python3-mpi4py     imports mpi4py
+    want "mpirun"                          openmpi-bin        runs mpirun
 }
 
 check
-[ ${#missing[@]} -eq 0 ] && exit 0
-echo "install-deps.sh: missing:"
-printf '  %s\n' "${missing[@]}"
+[ ${#missing[@]} -eq 0 ] && [ ${#wanted[@]} -eq 0 ] && exit 0
+[ ${#missing[@]} -gt 0 ] && { echo "install-deps.sh: missing:"; printf '  %s\n' "${missing[@]}"; }
+[ ${#wanted[@]} -gt 0 ] && { echo "install-deps.sh: wanted (the replica-exchange tests):"; printf '  %s\n' "${wanted[@]}"; }
 SUDO=""
 [ "$(id -u)" -ne 0 ] && SUDO="sudo"
 $SUDO apt-get update -qq
+
+# The first of an entry's names that this release's apt sources have ("" if none).
+candidate() {
+    local name policy
+    for name in $(echo "${1%%  (*}" | tr '|' ' '); do
+        policy="$(apt-cache policy "$name" 2>/dev/null)"
+        if [[ "$policy" =~ Candidate:\ [^\(] ]]; then echo "$name"; return; fi
+    done
+}
+
+# apt-get install of the packages; returns apt's status, its output in a log.
+install() {
+    local log
+    log="$(mktemp -t mrattle-apt.XXXXXX.log)"
+    echo "install-deps.sh: installing $* (apt's output: $log)"
+    DEBIAN_FRONTEND=noninteractive $SUDO apt-get -o DPkg::Lock::Timeout=600 install -y -q --no-install-recommends \
+        "$@" > "$log" 2>&1 || { tail -n 40 "$log" >&2; echo "install-deps.sh: apt-get install failed (log: $log)" >&2; return 1; }
+}
+
 packages=()
 for entry in "${missing[@]}"; do
-    chosen=""
-    for name in $(echo "${entry%%  (*}" | tr '|' ' '); do
-        policy="$(apt-cache policy "$name" 2>/dev/null)"
-        if [[ "$policy" =~ Candidate:\ [^\(] ]]; then chosen="$name"; break; fi
-    done
+    chosen="$(candidate "$entry")"
     [ -n "$chosen" ] || { echo "install-deps.sh: no package ${entry%%  (*} in this system's apt sources" >&2; exit 1; }
     packages+=("$chosen")
 done
-mapfile -t packages < <(printf '%s\n' "${packages[@]}" | sort -u)
-log="$(mktemp -t mrattle-apt.XXXXXX.log)"
-echo "install-deps.sh: installing ${packages[*]} (apt's output: $log)"
-DEBIAN_FRONTEND=noninteractive $SUDO apt-get install -y -q --no-install-recommends "${packages[@]}" > "$log" 2>&1 || {
-    tail -n 40 "$log" >&2; echo "install-deps.sh: apt-get install failed (log: $log)" >&2; exit 1; }
+if [ ${#packages[@]} -gt 0 ]; then
+    mapfile -t packages < <(printf '%s\n' "${packages[@]}" | sort -u)
+    install "${packages[@]}" || exit 1
+fi
+extras=()
+for entry in "${wanted[@]}"; do
+    chosen="$(candidate "$entry")"
+    if [ -n "$chosen" ]; then extras+=("$chosen")
+    else echo "install-deps.sh: note: no package ${entry%%  (*} in this system's apt sources; the replica-exchange tests will say what they lack"
+    fi
+done
+if [ ${#extras[@]} -gt 0 ]; then
+    mapfile -t extras < <(printf '%s\n' "${extras[@]}" | sort -u)
+    install "${extras[@]}" || echo "install-deps.sh: note: the replica-exchange tests' packages did not install; those tests will skip, saying why"
+fi
 check
 if [ ${#missing[@]} -gt 0 ]; then
     echo "install-deps.sh: still missing after installing (is $python the interpreter you meant?):" >&2
     printf '  %s\n' "${missing[@]}" >&2
     exit 1
+fi
+if [ ${#wanted[@]} -gt 0 ]; then
+    echo "install-deps.sh: note: still missing for the replica-exchange tests (they will skip, saying why):"
+    printf '  %s\n' "${wanted[@]}"
 fi

@@ -4,7 +4,8 @@
 #  1. makes the root with 'debootstrap --variant=minbase trixie' from the Debian mirror this
 #     system's apt uses (installing debootstrap first if needed), or reuses it: it lives in
 #     $MRATTLE_TRIXIE_ROOT (default /var/cache/mrattle/trixie-root), outside the checkout;
-#  2. copies a clean checkout of HEAD in (git archive: committed files only, no build folders);
+#  2. copies a clean checkout of HEAD in (git archive: committed files only, no build folders),
+#     and ../shared/deps beside it if there (openmmtools for the replica-exchange tests);
 #  3. inside, runs scripts/install-deps.sh (the one list of packages; no apt once all is there)
 #     and then the README's test command, scripts/test.sh (arguments go to its CTest).
 # It mounts proc, sys and dev into the root and unmounts them on any exit. It needs root;
@@ -111,6 +112,12 @@ mkdir -p "$target$checkout"
 git -C "$repo" archive --format=tar HEAD | tar -x -C "$target$checkout"
 if [ -n "$(git -C "$repo" status --porcelain --untracked-files=no)" ]; then
     echo "test-openmm8.sh: note: uncommitted changes in $repo are not tested (HEAD is)"
+fi
+# ../shared/deps beside the checkout (openmmtools and mpiplus, for the replica-exchange tests), as in CI.
+shared="$target$(dirname "$checkout")/shared"
+rm -rf --one-file-system "$shared"
+if [ -d "$repo/../shared/deps" ]; then
+    mkdir -p "$shared" && cp -a "$repo/../shared/deps" "$shared/deps"
 fi
 echo "=== Testing $(git -C "$repo" rev-parse --short HEAD) in $target$checkout ==="
 

@@ -148,7 +148,7 @@ IntegratorMaker maker(Build build) {
 const std::vector<IntegratorTraits>& integrators() {
     using namespace MRattlePlugin;
     static const std::vector<IntegratorTraits> list = {
-        // name, conservesEnergy, stochastic, runsOnDevicePlatforms, hasOwnState, rescalesVelocities, make, removeNoise
+        // name, conservesEnergy, stochastic, runsOnDevicePlatforms, hasOwnState, rescalesVelocities, make, removeNoise, heatBathEnergy
         {"MRattle", true, false, true, false, false, maker<MRattleIntegrator>([](auto make, double h) { return make(h); })},
         {"MRattleLangevin", false, true, true, true, false,
          maker<MRattleLangevinIntegrator>([](auto make, double h) {
@@ -160,7 +160,10 @@ const std::vector<IntegratorTraits>& integrators() {
         {"RigidSplitting", true, false, false, false, false,
          maker<RigidSplittingIntegrator>([](auto make, double h) { return make(h); })},
         {"MRattleNoseHoover", false, false, true, true, true,  // 300 K, 10/ps, chain of 3, MTS 3, Yoshida-Suzuki 7
-         maker<MRattleNoseHooverIntegrator>([](auto make, double h) { return make(300.0, 10.0, h); })},
+         maker<MRattleNoseHooverIntegrator>([](auto make, double h) { return make(300.0, 10.0, h); }), nullptr,
+         [](RigidBodyIntegrator& integrator) {
+             return dynamic_cast<MRattleNoseHooverIntegrator&>(integrator).computeHeatBathEnergy();
+         }},
         {"MRattleBussi", false, true, true, true, true,
          maker<MRattleBussiIntegrator>([](auto make, double h) {
              auto* bussi = make(300.0, 10.0, h);
@@ -169,6 +172,9 @@ const std::vector<IntegratorTraits>& integrators() {
          }),
          [](RigidBodyIntegrator& integrator) {
              dynamic_cast<MRattleBussiIntegrator&>(integrator).setCollisionFrequency(0);
+         },
+         [](RigidBodyIntegrator& integrator) {
+             return dynamic_cast<MRattleBussiIntegrator&>(integrator).computeHeatBathEnergy();
          }},
     };
     return list;

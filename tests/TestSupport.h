@@ -51,8 +51,9 @@ struct IntegratorTraits {
     /** Runs on the device platforms (OpenCL, CUDA) as well as Reference and CPU. */
     bool runsOnDevicePlatforms;
     /**
-     * Keeps state of its own that a State does not hold (a random stream, a thermostat's
-     * variables): after Context::setState() it continues otherwise than from a checkpoint.
+     * Keeps state of its own beyond positions and velocities (a random stream, a thermostat's
+     * variables): after Context::setState() of a State without its integrator parameters it
+     * continues otherwise than from a checkpoint (with them, only a random stream differs).
      */
     bool hasOwnState;
     /** Its step first scales every velocity by a thermostat's factor: a motion a test sets up is changed before the drift. */
@@ -64,6 +65,11 @@ struct IntegratorTraits {
     IntegratorMaker make;
     /** A stochastic one's noise turned off (device and host draw different numbers: what is left must agree); else none. */
     std::function<void(MRattlePlugin::RigidBodyIntegrator&)> removeNoise;
+    /**
+     * A thermostat with variables a State carries in its integrator parameters: the energy of
+     * its heat bath (computeHeatBathEnergy()); else none.
+     */
+    std::function<double(MRattlePlugin::RigidBodyIntegrator&)> heatBathEnergy;
 };
 /** Every rigid-body integrator of the plugin. */
 const std::vector<IntegratorTraits>& integrators();

@@ -146,6 +146,22 @@ protected:
      * (then the state is set again) or a checkpoint that fits is loaded.
      */
     void loadCheckpoint(std::istream& stream) override;
+    /**
+     * Writes the integrator's class name, a format version and the kernel's time-varying
+     * state (a thermostat's: the Nose-Hoover chain, CSVR's accumulated work; none for the
+     * others), so that Context::setState() of a State taken with the integrator's parameters
+     * restores it bit for bit (replica exchange on one Context). A random stream is not
+     * included: it stays the Context's.
+     */
+    void serializeParameters(OpenMM::SerializationNode& node) const override;
+    /**
+     * Restores what serializeParameters() wrote. Throws an OpenMMException saying what is
+     * wrong for parameters of another integrator class, another format, other names or sizes
+     * (another chain length) or values that are not finite; empty parameters (an integrator
+     * that writes none, as OpenMM's own) only an integrator without such state accepts.
+     * Context::setState() has set the positions and velocities before this is called.
+     */
+    void deserializeParameters(const OpenMM::SerializationNode& node) override;
 
 private:
     friend class RigidBodyMinimizer;

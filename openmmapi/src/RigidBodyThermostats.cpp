@@ -146,3 +146,24 @@ double RigidBodyThermostats::readCsvrWork(std::istream& stream) {
         throw OpenMMException("the checkpoint's kernel data is malformed (the thermostat's work is not finite)");
     return work;
 }
+
+// The names a State's integrator parameters use (RigidBodyIntegrator checks them before a set).
+IntegratorParameterValues RigidBodyThermostats::NoseHooverChain::parameters() const {
+    return {{"chainPositions", positions}, {"chainVelocities", velocities}};
+}
+
+RigidBodyThermostats::NoseHooverChain RigidBodyThermostats::NoseHooverChain::fromParameters(
+    const IntegratorParameterValues& values) {
+    NoseHooverChain chain;
+    chain.positions = values.at("chainPositions");
+    chain.velocities = values.at("chainVelocities");
+    return chain;
+}
+
+IntegratorParameterValues RigidBodyThermostats::csvrParameters(double work) {
+    return {{"rescalingWork", {work}}};
+}
+
+double RigidBodyThermostats::csvrWork(const IntegratorParameterValues& values) {
+    return values.at("rescalingWork").at(0);
+}

@@ -7,6 +7,7 @@
 #include "openmm/System.h"
 #include "openmm/Vec3.h"
 #include <iosfwd>
+#include <map>
 #include <string>
 #include <vector>
 
@@ -22,6 +23,12 @@ class MRattleLangevinIntegrator;
 class MRattleNoseHooverIntegrator;
 class MRattleBussiIntegrator;
 class RigidSplittingIntegrator;
+
+/**
+ * An integrator's time-varying state as a State carries it (Context::getState() with the
+ * integrator's parameters): named lists of numbers, e.g. a Nose-Hoover chain's positions.
+ */
+typedef std::map<std::string, std::vector<double> > IntegratorParameterValues;
 
 /**
  * What every rigid-body integrator needs from its platform. The kernel owns the step and
@@ -120,6 +127,18 @@ public:
      * Default: nothing.
      */
     virtual void discardRefusedCheckpoint(OpenMM::ContextImpl& context) {
+    }
+    /** The integrator's class name (the subclass's IntegratorName()), which messages use. */
+    virtual std::string integratorName() const = 0;
+    /**
+     * The integrator's time-varying state that a State carries (a thermostat's variables, not
+     * its random stream: replicas sharing one Context must not share one). Default: none.
+     */
+    virtual IntegratorParameterValues getIntegratorParameters(OpenMM::ContextImpl& context) {
+        return {};
+    }
+    /** Set what getIntegratorParameters() returns (the integrator has checked the names and sizes). */
+    virtual void setIntegratorParameters(OpenMM::ContextImpl& context, const IntegratorParameterValues& values) {
     }
 };
 

@@ -1,6 +1,7 @@
 #ifndef MRATTLE_RIGID_BODY_THERMOSTATS_H_
 #define MRATTLE_RIGID_BODY_THERMOSTATS_H_
 
+#include "internal/RigidBodyKernels.h"
 #include "internal/windowsExportMRattle.h"
 #include <iosfwd>
 #include <random>
@@ -50,6 +51,9 @@ struct OPENMM_EXPORT_MRATTLE NoseHooverChain {
     /** Its state, bit for bit (checkpoints); read() throws an OpenMMException if the stream does not fit. */
     void write(std::ostream& stream) const;
     void read(std::istream& stream);
+    /** Its state as integrator parameters (a State's: "chainPositions", "chainVelocities"), and back. */
+    IntegratorParameterValues parameters() const;
+    static NoseHooverChain fromParameters(const IntegratorParameterValues& values);
 };
 
 /**
@@ -69,6 +73,9 @@ OPENMM_EXPORT_MRATTLE double csvrScale(double kineticEnergy, double dof, double 
 OPENMM_EXPORT_MRATTLE void writeCsvrWork(std::ostream& stream, double work);
 /** The work writeCsvrWork() wrote; throws an OpenMMException if it is truncated or not finite. */
 OPENMM_EXPORT_MRATTLE double readCsvrWork(std::istream& stream);
+/** CSVR's accumulated work as integrator parameters (a State's: "rescalingWork"), and back. */
+OPENMM_EXPORT_MRATTLE IntegratorParameterValues csvrParameters(double work);
+OPENMM_EXPORT_MRATTLE double csvrWork(const IntegratorParameterValues& values);
 
 } // namespace RigidBodyThermostats
 } // namespace MRattlePlugin

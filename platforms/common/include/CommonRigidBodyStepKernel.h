@@ -22,6 +22,9 @@ public:
     CommonRigidBodyStepKernel(const std::string& name, const OpenMM::Platform& platform, OpenMM::ComputeContext& cc)
         : StepKernel(name, platform), dynamics(cc, StepKernel::IntegratorName()) {
     }
+    std::string integratorName() const override {
+        return StepKernel::IntegratorName();
+    }
     void initialize(const OpenMM::System& system, const RigidBodyTopology& topology,
                     const RigidBodyIntegrator& integrator) override {
         OpenMM::ContextSelector selector(dynamics.computeContext());

@@ -68,6 +68,8 @@ public:
     double computeHeatBathEnergy(OpenMM::ContextImpl& context, const MRattleNoseHooverIntegrator& integrator) override;
     void createCheckpoint(OpenMM::ContextImpl& context, std::ostream& stream) const override;
     void loadCheckpoint(OpenMM::ContextImpl& context, std::istream& stream) override;
+    IntegratorParameterValues getIntegratorParameters(OpenMM::ContextImpl& context) override;
+    void setIntegratorParameters(OpenMM::ContextImpl& context, const IntegratorParameterValues& values) override;
 
 protected:
     void initializeIntegrator(const OpenMM::System& system, const MRattleNoseHooverIntegrator& integrator) override;
@@ -94,6 +96,9 @@ public:
     double computeHeatBathEnergy(OpenMM::ContextImpl& context) override;
     void createCheckpoint(OpenMM::ContextImpl& context, std::ostream& stream) const override;
     void loadCheckpoint(OpenMM::ContextImpl& context, std::istream& stream) override;
+    /** The work only: the random stream stays the Context's (replicas must not share one). */
+    IntegratorParameterValues getIntegratorParameters(OpenMM::ContextImpl& context) override;
+    void setIntegratorParameters(OpenMM::ContextImpl& context, const IntegratorParameterValues& values) override;
 
 protected:
     void initializeIntegrator(const OpenMM::System& system, const MRattleBussiIntegrator& integrator) override;

@@ -154,6 +154,19 @@ void CommonIntegrateMRattleNoseHooverStepKernel::loadCheckpoint(ContextImpl& con
     uploadMixed(chainVelocity, chain.velocities);
 }
 
+IntegratorParameterValues CommonIntegrateMRattleNoseHooverStepKernel::getIntegratorParameters(ContextImpl& context) {
+    ContextSelector selector(dynamics.computeContext());
+    return downloadChain().parameters();
+}
+
+void CommonIntegrateMRattleNoseHooverStepKernel::setIntegratorParameters(ContextImpl& context,
+                                                                         const IntegratorParameterValues& values) {
+    ContextSelector selector(dynamics.computeContext());
+    const RigidBodyThermostats::NoseHooverChain chain = RigidBodyThermostats::NoseHooverChain::fromParameters(values);
+    uploadMixed(chainPosition, chain.positions);  // values read from this precision: exact
+    uploadMixed(chainVelocity, chain.velocities);
+}
+
 // ---- CSVR ----------------------------------------------------------------------------------
 
 void CommonIntegrateMRattleBussiStepKernel::initializeIntegrator(const System& system,
@@ -217,4 +230,15 @@ void CommonIntegrateMRattleBussiStepKernel::loadCheckpoint(ContextImpl& context,
     const double value = RigidBodyThermostats::readCsvrWork(stream);
     CommonVelocityScalingStepKernel::loadCheckpoint(context, stream);
     uploadMixed(work, vector<double>(1, value));
+}
+
+IntegratorParameterValues CommonIntegrateMRattleBussiStepKernel::getIntegratorParameters(ContextImpl& context) {
+    ContextSelector selector(dynamics.computeContext());
+    return RigidBodyThermostats::csvrParameters(downloadMixed(work)[0]);
+}
+
+void CommonIntegrateMRattleBussiStepKernel::setIntegratorParameters(ContextImpl& context,
+                                                                    const IntegratorParameterValues& values) {
+    ContextSelector selector(dynamics.computeContext());
+    uploadMixed(work, vector<double>(1, RigidBodyThermostats::csvrWork(values)));
 }

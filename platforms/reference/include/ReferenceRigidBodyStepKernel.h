@@ -20,6 +20,9 @@ public:
     ReferenceRigidBodyStepKernel(const std::string& name, const OpenMM::Platform& platform)
         : StepKernel(name, platform), dynamics(StepKernel::IntegratorName()) {
     }
+    std::string integratorName() const override {
+        return StepKernel::IntegratorName();
+    }
     void initialize(const OpenMM::System& system, const RigidBodyTopology& topology,
                     const RigidBodyIntegrator& integrator) override {
         dynamics.initialize(system, topology);

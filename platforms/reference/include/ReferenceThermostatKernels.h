@@ -49,6 +49,12 @@ public:
     double computeHeatBathEnergy(OpenMM::ContextImpl& context, const MRattleNoseHooverIntegrator& integrator) override;
     void createCheckpoint(OpenMM::ContextImpl& context, std::ostream& stream) const override;
     void loadCheckpoint(OpenMM::ContextImpl& context, std::istream& stream) override;
+    IntegratorParameterValues getIntegratorParameters(OpenMM::ContextImpl& context) override {
+        return chain.parameters();
+    }
+    void setIntegratorParameters(OpenMM::ContextImpl& context, const IntegratorParameterValues& values) override {
+        chain = RigidBodyThermostats::NoseHooverChain::fromParameters(values);
+    }
 
 protected:
     /** A chain of the integrator's length, at rest. */
@@ -74,6 +80,13 @@ public:
     }
     void createCheckpoint(OpenMM::ContextImpl& context, std::ostream& stream) const override;
     void loadCheckpoint(OpenMM::ContextImpl& context, std::istream& stream) override;
+    /** The work only: the random stream stays the Context's (replicas must not share one). */
+    IntegratorParameterValues getIntegratorParameters(OpenMM::ContextImpl& context) override {
+        return RigidBodyThermostats::csvrParameters(work);
+    }
+    void setIntegratorParameters(OpenMM::ContextImpl& context, const IntegratorParameterValues& values) override {
+        work = RigidBodyThermostats::csvrWork(values);
+    }
 
 protected:
     /** The stream seeded now (so a checkpoint before the first step holds it); no work yet. */
