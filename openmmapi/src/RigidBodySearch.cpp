@@ -158,13 +158,8 @@ double RigidBodySearch::evaluate(const double* variables, double* g) {
             cached.point = last;
             cached.value = value;
             cached.valid = true;
-            if (!best.valid || value < best.value) {
-                best.variables = cached.variables;
-                best.gradient = cached.gradient;
-                best.point = last;
-                best.value = value;
-                best.valid = true;
-            }
+            if (!best.valid || value < best.value)
+                best = cached;
             return value;
         } catch (const std::exception& e) {
             failure = e.what();

@@ -113,24 +113,21 @@ private:
     struct Point {
         double energy = 0, springEnergy = 0, gradientNorm2 = 0;
     } last, accepted;
-    /** The last evaluation, for liblbfgs's repeat of it; invalid once the variables or springs change meaning. */
-    struct {
+    /** An evaluation of the objective at some variables. */
+    struct Evaluation {
         bool valid = false;
         std::vector<double> variables, gradient;
         Point point;
         double value = 0;
-    } cached;
+    };
+    /** The last evaluation, for liblbfgs's repeat of it; invalid once the variables or springs change meaning. */
+    Evaluation cached;
     /**
      * The lowest evaluation since the variables last changed meaning. On huge forces a line
      * search can fail (its sufficient decrease out of reach) after a trial far below the
      * iterate: the search goes on from that trial, as LocalEnergyMinimizer ends at its last.
      */
-    struct {
-        bool valid = false;
-        std::vector<double> variables, gradient;
-        Point point;
-        double value = 0;
-    } best;
+    Evaluation best;
     /** After a failed line search (status < 0): move to the best trial if it is lower, updating status; true if moved. */
     bool continueFromBestTrial(int& status);
     /** Over the whole search; since the springs were last stiffened (the reporter's iteration). */
