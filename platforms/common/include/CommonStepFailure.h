@@ -22,12 +22,11 @@ namespace MRattlePlugin {
  * that would change the state then does nothing, and the backup kernel (the first of each
  * step) stops copying, so the backups keep the state from before the failed step and
  * flag()[1] the index of that step since the last check. The host learns of it lazily: at
- * the end of every CopyInterval-th step the flag is copied into OpenMM's pinned buffer
- * behind an event, and read when the next copy is queued (the device still has the steps
- * after it queued), so a failure is found at most 2 CopyInterval steps late; the frozen
- * state and the backups wait unchanged meanwhile. OpenMM's other users may reuse the
- * pinned buffer in between, so what is read there is only a hint: a nonzero one is
- * confirmed by a blocking read. The blocking check (synchronize())
+ * the end of every CopyInterval-th step the flag is copied into host memory of the
+ * plugin's own (HostMemory) behind an event, and read when the next copy is queued (the
+ * device still has the steps after it queued), so a failure is found at most 2
+ * CopyInterval steps late; the frozen state and the backups wait unchanged meanwhile.
+ * The blocking check (synchronize())
  * is made where the state can be read: at the end of each step(n), before checkpoints and
  * kinetic energies, and at reorderings (which read the state anyway). A failure found puts
  * back the state from before the failed step (positions, velocities, box, step count, time)
@@ -49,7 +48,22 @@ public:
      * nothing measurable. A failure found later costs only the frozen steps' force work.
      */
     static constexpr int CopyInterval = 16;
+    /**
+     * Where the flag's asynchronous copy goes: host memory of the plugin's own, never
+     * OpenMM's pinned buffer (which OpenMM overwrites: CUDA's energy sum lands there). Plain
+     * memory unless a platform sets its own: OpenCL copies into any host memory without
+     * waiting, CUDA only into page-locked memory (platforms/cuda sets cuMemHostAlloc's).
+     * Each platform's plugin links its own copy of this class, so the setting is per platform.
+     */
+    struct HostMemory {
+        void* (*allocate)(size_t bytes);
+        void (*release)(void* memory);
+    };
+    static void setHostMemory(const HostMemory& memory);
     CommonStepFailure(OpenMM::ComputeContext& cc, const std::string& integratorName);
+    ~CommonStepFailure();
+    CommonStepFailure(const CommonStepFailure&) = delete;
+    CommonStepFailure& operator=(const CommonStepFailure&) = delete;
     /** Allocate the flag and the backups (OpenMM's arrays must exist). */
     void initialize();
     /** The flag: [0] nonzero once a step failed, [1] the failed step's index since the last check. */
@@ -113,7 +127,10 @@ private:
     const std::string integratorName;
     OpenMM::ComputeArray failure, positions, corrections, velocities;
     OpenMM::ComputeEvent copied;
-    bool copyQueued = false;
+    /** The flag's last asynchronous copy (HostMemory), read once the event has passed. */
+    int* copy = nullptr;
+    /** copyQueued: a copy not read yet; copyEnqueued: a copy was ever queued (the destructor waits for it). */
+    bool copyQueued = false, copyEnqueued = false;
     int stepsSinceCopy = 0;
     /** Steps since the last check, their step size, and the step count and time at it. */
     int unchecked = 0;

@@ -1,6 +1,7 @@
 #include "CommonStepFailure.h"
 #include "openmm/OpenMMException.h"
 #include "openmm/internal/ContextImpl.h"
+#include <cstdlib>
 
 using namespace MRattlePlugin;
 using namespace OpenMM;
@@ -43,10 +44,35 @@ void uploadFromDouble(ArrayInterface& array, const vector<mm_double4>& values) {
     }
 }
 
+void* allocatePlain(size_t bytes) {
+    return std::calloc(1, bytes);
+}
+
+void releasePlain(void* memory) {
+    std::free(memory);
+}
+
+CommonStepFailure::HostMemory hostMemory = {allocatePlain, releasePlain};
+
 } // namespace
+
+void CommonStepFailure::setHostMemory(const HostMemory& memory) {
+    hostMemory = memory;
+}
 
 CommonStepFailure::CommonStepFailure(ComputeContext& cc, const std::string& integratorName)
     : cc(cc), integratorName(integratorName) {
+}
+
+CommonStepFailure::~CommonStepFailure() {
+    if (copy == nullptr)
+        return;
+    try {
+        if (copyEnqueued)
+            copied->wait();  // the device may still be writing into it
+    } catch (...) {
+    }
+    hostMemory.release(copy);
 }
 
 void CommonStepFailure::initialize() {
@@ -57,6 +83,11 @@ void CommonStepFailure::initialize() {
         corrections.initialize(cc, cc.getPaddedNumAtoms(), cc.getPosq().getElementSize(), "mrattleCorrectionBackup");
     velocities.initialize(cc, cc.getPaddedNumAtoms(), cc.getVelm().getElementSize(), "mrattleVelmBackup");
     copied = cc.createEvent();
+    if (copy == nullptr) {
+        copy = (int*) hostMemory.allocate(2 * sizeof(int));
+        if (copy == nullptr)
+            throw OpenMMException(integratorName + ": no host memory for the failure flag's copy");
+    }
     rememberOrder();
 }
 
@@ -82,17 +113,16 @@ void CommonStepFailure::stepQueued() {
     if (++stepsSinceCopy < CopyInterval)
         return;
     stepsSinceCopy = 0;
-    int* hint = (int*) cc.getPinnedBuffer();
     if (copyQueued) {
         // The last copy's flag: the device has the steps since still queued, so it stays busy.
         copied->wait();
         copyQueued = false;
-        if (hint[0] != 0)
-            synchronize();  // confirmed (or not) by a blocking read: the pinned buffer is shared
+        if (copy[0] != 0)
+            synchronize();  // puts the state back and throws
     }
-    failure.download(hint, false);
+    failure.download(copy, false);
     copied->enqueue();
-    copyQueued = true;
+    copyQueued = copyEnqueued = true;
 }
 
 bool CommonStepFailure::failed() {
