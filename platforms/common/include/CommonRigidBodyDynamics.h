@@ -72,6 +72,10 @@ public:
     OpenMM::ComputeArray& failureFlag() {
         return stepFailure.flag();
     }
+    /** What an integrator's own kernel that fails records in the flag (CommonStepFailure::stepIndex()). */
+    int failureStepIndex() const {
+        return stepFailure.stepIndex();
+    }
     /**
      * For an integrator whose own kernel changes the state before the step's first pass (a
      * thermostat's half step): that kernel backs up the atoms instead, with the arrays
@@ -210,8 +214,9 @@ private:
     OpenMM::ComputeKernel advanceGroups, projectBodies, constrainFreeVelocities, collideBodies;
     // Indices of the arguments set at each launch.
     int advanceBackupIndex, advanceKickTime, advanceProjectAfterKick, advanceDriftTime, advanceTolerance,
-        advanceNoiseDecay, advanceNoiseScale, advanceRandomIndex, advanceProjectAtEnd, advanceResetFollows, projectOnlyIfNotRigid,
-        freeVelocitiesTolerance, collideKT, collideRandomIndex;
+        advanceNoiseDecay, advanceNoiseScale, advanceRandomIndex, advanceProjectAtEnd, advanceResetFollows,
+        advanceStepIndex, projectOnlyIfNotRigid, freeVelocitiesTolerance, freeVelocitiesStepIndex, collideKT,
+        collideRandomIndex;
 };
 
 } // namespace MRattlePlugin

@@ -79,7 +79,7 @@ private:
     OpenMM::ComputeProgram program;
     OpenMM::ComputeKernel chainKernel;
     OpenMM::ComputeArray chainPosition, chainVelocity, positionBackup, velocityBackup, weights;
-    int argumentDof, argumentKT, argumentFrequency, argumentHalfStep, argumentBackUp;
+    int argumentDof, argumentKT, argumentFrequency, argumentHalfStep, argumentBackUp, argumentStepIndex;
     bool argumentsSet = false;
 };
 
@@ -103,7 +103,7 @@ private:
     OpenMM::ComputeProgram program;
     OpenMM::ComputeKernel rescaleKernel;
     OpenMM::ComputeArray work, workBackup;
-    int argumentRandomIndex, argumentDof, argumentKT, argumentC, argumentBackUp;
+    int argumentRandomIndex, argumentDof, argumentKT, argumentC, argumentBackUp, argumentStepIndex;
     bool argumentsSet = false;
 };
 

@@ -235,6 +235,7 @@ void CommonRigidBodyDynamics::advance(const Pass& pass) {
                               (unsigned int) cc.getIntegrationUtilities().prepareRandomNumbers(cc.getPaddedNumAtoms()));
     advanceGroups->setArg(advanceProjectAtEnd, pass.projectAtEnd ? 1 : 0);
     advanceGroups->setArg(advanceResetFollows, pass.resetFollows ? 1 : 0);
+    advanceGroups->setArg(advanceStepIndex, stepFailure.stepIndex());
     if (numGroups > 0)
         advanceGroups->execute(numGroups);
     backupStepIndex = -1;  // once per step
@@ -270,6 +271,7 @@ void CommonRigidBodyDynamics::project(double tolerance, bool onlyIfNotRigid) {
     }
     if (numClusters > 0) {
         setMixedArg(constrainFreeVelocities, freeVelocitiesTolerance, tolerance);
+        constrainFreeVelocities->setArg(freeVelocitiesStepIndex, stepFailure.stepIndex());
         constrainFreeVelocities->execute(numClusters);
     }
 }

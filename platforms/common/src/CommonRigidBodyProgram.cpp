@@ -152,6 +152,7 @@ void CommonRigidBodyDynamics::setKernelArguments() {
     advanceProjectAtEnd = advance.add(0);
     advanceResetFollows = advance.add(0);
     advance.add(stepFailure.flag());
+    advanceStepIndex = advance.add(0);
 
     CommonKernelArguments projection(projectBodies, doubleMixed);
     projection.add(numBodies);
@@ -173,6 +174,7 @@ void CommonRigidBodyDynamics::setKernelArguments() {
     freeVelocities.add(cc.getVelm());
     freeVelocitiesTolerance = freeVelocities.addMixed(0.0);
     freeVelocities.add(stepFailure.flag());
+    freeVelocitiesStepIndex = freeVelocities.add(0);
 
     if (hasAndersen) {
         CommonKernelArguments collide(collideBodies, doubleMixed);

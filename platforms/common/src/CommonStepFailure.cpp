@@ -76,15 +76,17 @@ CommonStepFailure::~CommonStepFailure() {
 }
 
 void CommonStepFailure::initialize() {
-    failure.initialize<int>(cc, 2, "mrattleFailure");
-    failure.upload(vector<int>(2, 0));
+    failure.initialize<int>(cc, 1, "mrattleFailure");
+    failure.upload(vector<int>(1, 0));
+    if (const char* step = std::getenv("MRATTLE_TEST_FAIL_AT_STEP"))
+        testFailAtStep = std::atoll(step);
     positions.initialize(cc, cc.getPaddedNumAtoms(), cc.getPosq().getElementSize(), "mrattlePosqBackup");
     if (cc.getUseMixedPrecision())
         corrections.initialize(cc, cc.getPaddedNumAtoms(), cc.getPosq().getElementSize(), "mrattleCorrectionBackup");
     velocities.initialize(cc, cc.getPaddedNumAtoms(), cc.getVelm().getElementSize(), "mrattleVelmBackup");
     copied = cc.createEvent();
     if (copy == nullptr) {
-        copy = (int*) hostMemory.allocate(2 * sizeof(int));
+        copy = (int*) hostMemory.allocate(sizeof(int));
         if (copy == nullptr)
             throw OpenMMException(integratorName + ": no host memory for the failure flag's copy");
     }
@@ -104,6 +106,8 @@ int CommonStepFailure::stepStarted(ContextImpl& context, double size) {
     cc.getPeriodicBoxVectors(box.box[0], box.box[1], box.box[2]);
     if (boxes.empty() || !sameBox(boxes.back().box, box.box))
         boxes.push_back(box);
+    if (cc.getStepCount() == testFailAtStep)
+        failure.upload(vector<int>(1, unchecked + 1));
     return unchecked++;
 }
 
@@ -125,12 +129,6 @@ void CommonStepFailure::stepQueued() {
     copyQueued = copyEnqueued = true;
 }
 
-bool CommonStepFailure::failed() {
-    int values[2];
-    failure.download(values);
-    return values[0] != 0;
-}
-
 void CommonStepFailure::synchronize() {
     copyQueued = false;  // what it copied is read here, blocking
     if (!deferred.empty()) {
@@ -141,14 +139,15 @@ void CommonStepFailure::synchronize() {
     }
     if (unchecked == 0)
         return;
-    int values[2];
-    failure.download(values);
-    if (values[0] == 0) {
+    int failed;
+    failure.download(&failed);
+    if (failed == 0) {
         checked();
         return;
     }
-    const long long failedStepCount = stepCountAtCheck + values[1];
-    restore(values[1]);
+    const int failedStep = failed - 1;
+    const long long failedStepCount = stepCountAtCheck + failedStep;
+    restore(failedStep);
     checked();
     throw OpenMMException(message(failedStepCount));
 }
@@ -157,14 +156,15 @@ void CommonStepFailure::atomsReordered() {
     // OpenMM reorders only at the end of a step; its reorder has downloaded the state, so
     // this blocking read costs no extra wait.
     if (unchecked > 0 && deferred.empty()) {
-        int values[2];
-        failure.download(values);
-        if (values[0] != 0) {
-            const long long failedStepCount = stepCountAtCheck + values[1];
-            restoreClock(values[1]);
+        int failed;
+        failure.download(&failed);
+        if (failed != 0) {
+            const int failedStep = failed - 1;
+            const long long failedStepCount = stepCountAtCheck + failedStep;
+            restoreClock(failedStep);
             restoreStates();
             restoreAcrossReorder();
-            failure.upload(vector<int>(2, 0));
+            failure.upload(vector<int>(1, 0));
             deferred = message(failedStepCount);  // a listener must not throw: the next check does
         }
     }
@@ -177,7 +177,7 @@ void CommonStepFailure::rememberOrder() {
 }
 
 void CommonStepFailure::reset() {
-    failure.upload(vector<int>(2, 0));
+    failure.upload(vector<int>(1, 0));
     copyQueued = false;
     deferred.clear();
     checked();
@@ -216,7 +216,7 @@ void CommonStepFailure::restore(int failedStep) {
     if (cc.getUseMixedPrecision())
         corrections.copyTo(cc.getPosqCorrection());
     velocities.copyTo(cc.getVelm());
-    failure.upload(vector<int>(2, 0));
+    failure.upload(vector<int>(1, 0));
 }
 
 void CommonStepFailure::restoreAcrossReorder() {

@@ -115,6 +115,7 @@ void CommonIntegrateMRattleNoseHooverStepKernel::halfStep(const MRattleNoseHoove
         argumentBackUp = arguments.add(-1);
         arguments.add(positionBackup);
         arguments.add(velocityBackup);
+        argumentStepIndex = arguments.add(0);
         argumentsSet = true;
     }
     dynamics.setMixedArg(chainKernel, argumentDof, degreesOfFreedom());
@@ -122,6 +123,7 @@ void CommonIntegrateMRattleNoseHooverStepKernel::halfStep(const MRattleNoseHoove
     dynamics.setMixedArg(chainKernel, argumentFrequency, integrator.getCollisionFrequency());
     dynamics.setMixedArg(chainKernel, argumentHalfStep, 0.5 * integrator.getStepSize());
     chainKernel->setArg(argumentBackUp, first ? dynamics.takeStepBackup() : -1);
+    chainKernel->setArg(argumentStepIndex, dynamics.failureStepIndex());
     chainKernel->execute(ThermostatThreads, ThermostatThreads);
 }
 
@@ -188,6 +190,7 @@ void CommonIntegrateMRattleBussiStepKernel::halfStep(const MRattleBussiIntegrato
         dynamics.addBackupArguments(arguments);
         argumentBackUp = arguments.add(-1);
         arguments.add(workBackup);
+        argumentStepIndex = arguments.add(0);
         argumentsSet = true;
     }
     // dof Gaussian numbers: at most 3 per atom, so the 4 per padded atom of one draw suffice.
@@ -197,6 +200,7 @@ void CommonIntegrateMRattleBussiStepKernel::halfStep(const MRattleBussiIntegrato
     dynamics.setMixedArg(rescaleKernel, argumentKT, BOLTZ * integrator.getTemperature());
     dynamics.setMixedArg(rescaleKernel, argumentC, std::exp(-integrator.getCollisionFrequency() * 0.5 * integrator.getStepSize()));
     rescaleKernel->setArg(argumentBackUp, first ? dynamics.takeStepBackup() : -1);
+    rescaleKernel->setArg(argumentStepIndex, dynamics.failureStepIndex());
     rescaleKernel->execute(ThermostatThreads, ThermostatThreads);
 }
 

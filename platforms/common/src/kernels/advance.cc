@@ -4,7 +4,7 @@
  * (massless ones included, for the backup). Work items 0..numBodies-1 take the bodies,
  * then the clusters, then the free atoms. Each phase is done if asked for, in this order:
  *
- *   backup (backupStepIndex >= 0; the index goes into failure[1]), kick (kickTime != 0),
+ *   backup (backupStepIndex >= 0: the step's first pass), kick (kickTime != 0),
  *   projection (projectAfterKick), drift and reset (driftTime != 0: M-RATTLE's reset for a
  *   body, SHAKE for a cluster, a drift for a free atom), Langevin friction and noise and a
  *   projection (noiseDecay != 1; at zero temperature noiseScale is 0), projection (projectAtEnd).
@@ -15,7 +15,9 @@
  * reset is the same to round-off, for a projection's work less.
  *
  * A group's phases read and write only its own atoms, so no phase waits for another group.
- * A failure of any group sets failure[0]; the host puts back the backup (CommonStepFailure).
+ * A failure of any group sets failure[0] to 1 + stepIndex; the host puts back the backup
+ * (CommonStepFailure). A work item that finds its own step failed when the pass is the
+ * step's backup still backs up its groups (and does nothing else), so the backup is of one time.
  *
  * (See bodyMath.cc for the program's layout and the failure flag.)
  */
@@ -95,11 +97,11 @@ KERNEL void advanceGroups(int numBodies, int numClusters, int numFree, GLOBAL co
         GLOBAL real4* RESTRICT posqBackup, GLOBAL real4* RESTRICT correctionBackup, GLOBAL mixed4* RESTRICT velmBackup,
         int backupStepIndex, mixed kickTime, int projectAfterKick, mixed driftTime, mixed tolerance, mixed noiseDecay,
         mixed noiseScale, GLOBAL const float4* RESTRICT random, unsigned int randomIndex, int projectAtEnd,
-        int resetFollows, GLOBAL int* RESTRICT failure) {
-    if (failure[0] != 0)
+        int resetFollows, GLOBAL int* RESTRICT failure, int stepIndex) {
+    const int failed = failure[0];
+    if (skipAfterFailure(failed, backupStepIndex))
         return;
-    if (backupStepIndex >= 0 && GLOBAL_ID == 0)
-        failure[1] = backupStepIndex;
+    const bool onlyBackup = failed != 0;  // another group of this step failed: only its backup
     const mixed kickScale = kickTime/(mixed) 0x100000000;
     const int numGroups = numBodies + numClusters + numFree;
     for (int group = GLOBAL_ID; group < numGroups; group += GLOBAL_SIZE) {
@@ -125,6 +127,11 @@ KERNEL void advanceGroups(int numBodies, int numClusters, int numFree, GLOBAL co
             start = index;
             end = index + 1;
             atoms = freeAtoms;
+        }
+        if (onlyBackup) {
+            backupAndKick(start, end, atoms, true, posq, posqCorrection, velm, posqBackup, correctionBackup, velmBackup,
+                          0, force, paddedNumAtoms);
+            continue;
         }
         bool ok;
         if (kind == GROUP_BODY)
@@ -152,6 +159,6 @@ KERNEL void advanceGroups(int numBodies, int numClusters, int numFree, GLOBAL co
                 ok = projectCluster(kind, index, clusterStart, constraintAtoms, tolerance, posq, posqCorrection, velm) && ok;
         }
         if (!ok)
-            recordFailure(failure);
+            recordFailure(failure, stepIndex);
     }
 }

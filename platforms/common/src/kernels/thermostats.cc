@@ -10,15 +10,13 @@
 
 /**
  * The step's backup of the atoms (backupStepIndex >= 0: this is the step's first kernel that
- * changes the state, the flag clear), as the step's first pass would make it (advance.cc).
+ * changes the state), as the step's first pass would make it (advance.cc).
  */
 DEVICE void backupAtoms(int numAtoms, GLOBAL const real4* RESTRICT posq, GLOBAL const real4* RESTRICT posqCorrection,
         GLOBAL const mixed4* RESTRICT velm, GLOBAL real4* RESTRICT posqBackup, GLOBAL real4* RESTRICT correctionBackup,
-        GLOBAL mixed4* RESTRICT velmBackup, int backupStepIndex, GLOBAL int* RESTRICT failure) {
+        GLOBAL mixed4* RESTRICT velmBackup, int backupStepIndex) {
     if (backupStepIndex < 0)
         return;
-    if (LOCAL_ID == 0)
-        failure[1] = backupStepIndex;
     for (int atom = LOCAL_ID; atom < numAtoms; atom += LOCAL_SIZE)
         backupAtom(atom, posq, posqCorrection, velm, posqBackup, correctionBackup, velmBackup);
 }
@@ -50,10 +48,11 @@ DEVICE mixed twiceKineticOfAtoms(int numAtoms, GLOBAL const mixed4* RESTRICT vel
  * Scale every velocity by the factor; a factor that is not finite (from a kinetic energy that
  * is not) is a failure of the step, which the host then undoes, and scales nothing.
  */
-DEVICE void scaleAllVelocities(int numAtoms, GLOBAL mixed4* RESTRICT velm, mixed factor, GLOBAL int* RESTRICT failure) {
+DEVICE void scaleAllVelocities(int numAtoms, GLOBAL mixed4* RESTRICT velm, mixed factor, GLOBAL int* RESTRICT failure,
+        int stepIndex) {
     if (!(factor*factor <= 1e30f)) {
         if (LOCAL_ID == 0)
-            recordFailure(failure);
+            recordFailure(failure, stepIndex);
         return;
     }
     for (int index = LOCAL_ID; index < numAtoms; index += LOCAL_SIZE) {
@@ -91,10 +90,20 @@ KERNEL void noseHooverChainHalfStep(int numAtoms, GLOBAL mixed4* RESTRICT velm, 
         int numWeights, int numMTS, mixed dof, mixed kT, mixed frequency, mixed halfStep,
         GLOBAL int* RESTRICT failure, GLOBAL const real4* RESTRICT posq, GLOBAL const real4* RESTRICT posqCorrection,
         GLOBAL real4* RESTRICT posqBackup, GLOBAL real4* RESTRICT correctionBackup, GLOBAL mixed4* RESTRICT velmBackup,
-        int backupStepIndex, GLOBAL mixed* RESTRICT chainPositionBackup, GLOBAL mixed* RESTRICT chainVelocityBackup) {
-    if (failure[0] != 0)
+        int backupStepIndex, GLOBAL mixed* RESTRICT chainPositionBackup, GLOBAL mixed* RESTRICT chainVelocityBackup,
+        int stepIndex) {
+    const int failed = failure[0];
+    if (skipAfterFailure(failed, backupStepIndex))
         return;
-    backupAtoms(numAtoms, posq, posqCorrection, velm, posqBackup, correctionBackup, velmBackup, backupStepIndex, failure);
+    backupAtoms(numAtoms, posq, posqCorrection, velm, posqBackup, correctionBackup, velmBackup, backupStepIndex);
+    if (failed != 0) {  // this step failed already: its backup only
+        if (LOCAL_ID == 0)
+            for (int j = 0; j < chainLength; j++) {
+                chainPositionBackup[j] = chainPosition[j];
+                chainVelocityBackup[j] = chainVelocity[j];
+            }
+        return;
+    }
     LOCAL mixed sums[THERMOSTAT_THREADS];
     LOCAL mixed unused[THERMOSTAT_THREADS];
     LOCAL mixed factor;
@@ -125,7 +134,7 @@ KERNEL void noseHooverChainHalfStep(int numAtoms, GLOBAL mixed4* RESTRICT velm, 
         factor = scale;
     }
     SYNC_THREADS;
-    scaleAllVelocities(numAtoms, velm, factor, failure);
+    scaleAllVelocities(numAtoms, velm, factor, failure, stepIndex);
 }
 
 /**
@@ -138,10 +147,16 @@ KERNEL void stochasticRescalingHalfStep(int numAtoms, GLOBAL mixed4* RESTRICT ve
         unsigned int randomIndex, int dof, mixed kT, mixed c, GLOBAL mixed* RESTRICT work,
         GLOBAL int* RESTRICT failure, GLOBAL const real4* RESTRICT posq, GLOBAL const real4* RESTRICT posqCorrection,
         GLOBAL real4* RESTRICT posqBackup, GLOBAL real4* RESTRICT correctionBackup, GLOBAL mixed4* RESTRICT velmBackup,
-        int backupStepIndex, GLOBAL mixed* RESTRICT workBackup) {
-    if (failure[0] != 0)
+        int backupStepIndex, GLOBAL mixed* RESTRICT workBackup, int stepIndex) {
+    const int failed = failure[0];
+    if (skipAfterFailure(failed, backupStepIndex))
         return;
-    backupAtoms(numAtoms, posq, posqCorrection, velm, posqBackup, correctionBackup, velmBackup, backupStepIndex, failure);
+    backupAtoms(numAtoms, posq, posqCorrection, velm, posqBackup, correctionBackup, velmBackup, backupStepIndex);
+    if (failed != 0) {  // this step failed already: its backup only
+        if (LOCAL_ID == 0)
+            workBackup[0] = work[0];
+        return;
+    }
     LOCAL mixed sums[THERMOSTAT_THREADS];
     LOCAL mixed squares[THERMOSTAT_THREADS];
     LOCAL mixed factor;
@@ -169,5 +184,5 @@ KERNEL void stochasticRescalingHalfStep(int numAtoms, GLOBAL mixed4* RESTRICT ve
         factor = alpha;
     }
     SYNC_THREADS;
-    scaleAllVelocities(numAtoms, velm, factor, failure);
+    scaleAllVelocities(numAtoms, velm, factor, failure, stepIndex);
 }
