@@ -142,6 +142,8 @@ void CommonRigidBodyDynamics::initialize(const System& system, const RigidBodyTo
     bodyReference.upload(vector<mm_double4>(bodyReference.getSize(), mm_double4(0, 0, 0, 0)), true);
     bodyOrientation.initialize(cc, 9 * std::max(1, numBodies), mixedSize, "mrattleBodyOrientation");
     bodyOrientation.upload(identityOrientations(), true);
+    velocityScaleArray.initialize(cc, 1, mixedSize, "mrattleVelocityScale");
+    velocityScaleArray.upload(vector<double>(1, 1.0), true);
     stepFailure.initialize();
     mapAtoms();
     cc.addReorderListener(new ReorderListener(*this));
@@ -236,6 +238,7 @@ void CommonRigidBodyDynamics::advance(const Pass& pass) {
     advanceGroups->setArg(advanceProjectAtEnd, pass.projectAtEnd ? 1 : 0);
     advanceGroups->setArg(advanceResetFollows, pass.resetFollows ? 1 : 0);
     advanceGroups->setArg(advanceStepIndex, stepFailure.stepIndex());
+    advanceGroups->setArg(advanceScaleVelocities, pass.scaleVelocities ? 1 : 0);
     if (numGroups > 0)
         advanceGroups->execute(numGroups);
     backupStepIndex = -1;  // once per step

@@ -82,14 +82,6 @@ ComputeProgram CommonRigidBodyDynamics::compileWith(const std::string& sources) 
                              programDefines(cc.getUseDoublePrecision(), cc.getUseMixedPrecision()));
 }
 
-void CommonRigidBodyDynamics::addBackupArguments(CommonKernelArguments& arguments) {
-    arguments.add(cc.getPosq());
-    arguments.add(cc.getUseMixedPrecision() ? cc.getPosqCorrection() : cc.getPosq());
-    arguments.add(stepFailure.posqBackup());
-    arguments.add(stepFailure.correctionBackup());
-    arguments.add(stepFailure.velmBackup());
-}
-
 void CommonRigidBodyDynamics::addMixedArg(ComputeKernel& kernel, double value) const {
     if (cc.getUseDoublePrecision() || cc.getUseMixedPrecision())
         kernel->addArg(value);
@@ -153,6 +145,8 @@ void CommonRigidBodyDynamics::setKernelArguments() {
     advanceResetFollows = advance.add(0);
     advance.add(stepFailure.flag());
     advanceStepIndex = advance.add(0);
+    advance.add(velocityScaleArray);
+    advanceScaleVelocities = advance.add(0);
 
     CommonKernelArguments projection(projectBodies, doubleMixed);
     projection.add(numBodies);
