@@ -8,10 +8,12 @@
  * without a device, is skipped, saying why.
  */
 #include "TestSupport.h"
+#include "MRattleNoseHooverIntegrator.h"
 #include "MRattlePlatforms.h"
 #include <gtest/gtest.h>
 #include <chrono>
 #include <cmath>
+#include <cstdlib>
 #include <iostream>
 #include <limits>
 #include <sstream>
@@ -436,6 +438,52 @@ TEST_P(DevicePlatform, AFailureInsideStepNIsFoundLateAndUndoneExactly) {
     context->setVelocities(velocities);
     integrator.step(10);
     EXPECT_EQ(beforeFailure.getStepCount() + 10, context->getState(State::Positions).getStepCount());
+}
+
+TEST_P(DevicePlatform, AFailureFoundByTheStepsOwnBackupIsUndoneToThatStepsStart) {
+    // A step's backup is made by its first launch, whose work groups may start after another
+    // group of that launch has failed: each must still back up its atoms, or the state put
+    // back mixes two times. The hook MRATTLE_TEST_FAIL_AT_STEP sets the flag before that
+    // launch as if a group of the step had failed first, so every group finds it set: every
+    // atom (and the Nose-Hoover chain) must come back at the failed step's start.
+    Cluster c = waterBox(NonbondedForce::NoCutoff);
+    const State start = rigidStart(c);
+    const int failAt = 7;
+    for (bool chain : {false, true}) {
+        auto make = [&]() -> std::unique_ptr<Integrator> {
+            if (chain)
+                return std::unique_ptr<Integrator>(new MRattleNoseHooverIntegrator(300, 10, 0.002));
+            return std::unique_ptr<Integrator>(new MRattleIntegrator(0.002));
+        };
+        const string name = chain ? "MRattleNoseHooverIntegrator" : "MRattleIntegrator";
+        State before;
+        double heatBath = 0;
+        {
+            std::unique_ptr<Integrator> integrator = make();
+            std::unique_ptr<Context> context = deviceContext(GetParam(), *c.system, *integrator, "double");
+            context->setPositions(start.getPositions());
+            context->setVelocities(start.getVelocities());
+            integrator->step(failAt);
+            before = context->getState(State::Positions | State::Velocities);
+            if (chain)
+                heatBath = static_cast<MRattleNoseHooverIntegrator&>(*integrator).computeHeatBathEnergy();
+        }
+        std::unique_ptr<Integrator> integrator = make();
+        setenv("MRATTLE_TEST_FAIL_AT_STEP", std::to_string(failAt).c_str(), 1);
+        std::unique_ptr<Context> context = deviceContext(GetParam(), *c.system, *integrator, "double");
+        unsetenv("MRATTLE_TEST_FAIL_AT_STEP");
+        context->setPositions(start.getPositions());
+        context->setVelocities(start.getVelocities());
+        const string message = messageOf([&] { integrator->step(20); });
+        EXPECT_EQ(0u, message.find(name + ": at step " + std::to_string(failAt) + " ")) << message;
+        State state = context->getState(State::Positions | State::Velocities);
+        EXPECT_EQ(failAt, state.getStepCount()) << name;
+        EXPECT_EQ(before.getTime(), state.getTime()) << name;
+        EXPECT_EQ(0.0, maxDeviation(before.getPositions(), state.getPositions())) << name;
+        EXPECT_EQ(0.0, maxDeviation(before.getVelocities(), state.getVelocities())) << name;
+        if (chain)
+            EXPECT_EQ(heatBath, static_cast<MRattleNoseHooverIntegrator&>(*integrator).computeHeatBathEnergy());
+    }
 }
 
 TEST_P(DevicePlatform, AFailureFoundAtAReorderingIsUndoneInTheNewOrder) {

@@ -23,8 +23,6 @@ class ContextImpl;
 
 namespace MRattlePlugin {
 
-class CommonKernelArguments;
-
 class RigidBodyIntegrator;
 
 /**
@@ -72,18 +70,22 @@ public:
     OpenMM::ComputeArray& failureFlag() {
         return stepFailure.flag();
     }
-    /**
-     * For an integrator whose own kernel changes the state before the step's first pass (a
-     * thermostat's half step): that kernel backs up the atoms instead, with the arrays
-     * addBackupArguments() adds (posq, its corrections or posq, and the three backups) and
-     * the index this returns (-1: backed up already this step); the first pass then does not.
-     */
-    int takeStepBackup() {
-        const int index = backupStepIndex;
-        backupStepIndex = -1;
-        return index;
+    /** What an integrator's own kernel that fails records in the flag (CommonStepFailure::stepIndex()). */
+    int failureStepIndex() const {
+        return stepFailure.stepIndex();
     }
-    void addBackupArguments(CommonKernelArguments& arguments);
+    /**
+     * The index of the step whose backup its first pass makes (-1: made already): an
+     * integrator's own kernel that changes state of its own before that pass (a thermostat's
+     * chain) backs that state up when this is >= 0.
+     */
+    int stepBackupIndex() const {
+        return backupStepIndex;
+    }
+    /** What a pass with scaleVelocities multiplies every velocity by (one 'mixed' number, set on the device by a thermostat). */
+    OpenMM::ComputeArray& velocityScale() {
+        return velocityScaleArray;
+    }
     /** An integrator's own device state and its backup, put back with the atoms' when a step fails (CommonStepFailure::addState). */
     void addStepState(OpenMM::ComputeArray& state, OpenMM::ComputeArray& backup) {
         stepFailure.addState(state, backup);
@@ -97,10 +99,11 @@ public:
     void beginStep(OpenMM::ContextImpl& context, const RigidBodyIntegrator& integrator, bool& forcesAreValid);
     /**
      * The phases of one fused pass over the groups of atoms that move together (a body, a
-     * cluster of free constraints, a free atom), in this order, each if asked for: a kick
-     * over kickTime with the Context's forces; RATTLE's velocity step; a drift over
-     * driftTime with the bodies' resets and SHAKE; Langevin noise (v = a v + noiseScale
-     * sqrt(1/m) g, a = noiseDecay) followed by the velocity step; the velocity step.
+     * cluster of free constraints, a free atom), in this order, each if asked for: a scaling
+     * of the velocities (scaleVelocities); a kick over kickTime with the Context's forces;
+     * RATTLE's velocity step; a drift over driftTime with the bodies' resets and SHAKE;
+     * Langevin noise (v = a v + noiseScale sqrt(1/m) g, a = noiseDecay) followed by the
+     * velocity step; the velocity step.
      * resetFollows: the next pass starts with a drift, so the bodies' velocity step after
      * the noise is left to it (kernels/advance.cc says why that is exact).
      */
@@ -109,6 +112,8 @@ public:
         bool projectAfterKick = false;
         double driftTime = 0;
         double noiseDecay = 1, noiseScale = 0;
+        /** Multiply every velocity by velocityScale()[0], after the backup, before the kick (a thermostat's). */
+        bool scaleVelocities = false;
         bool projectAtEnd = false;
         bool resetFollows = false;
     };
@@ -207,11 +212,13 @@ private:
     OpenMM::ComputeArray bodyReference;
     /** Each body's orientation (9 numbers, row-major) turning its reference geometry into its shape now. */
     OpenMM::ComputeArray bodyOrientation;
+    OpenMM::ComputeArray velocityScaleArray;
     OpenMM::ComputeKernel advanceGroups, projectBodies, constrainFreeVelocities, collideBodies;
     // Indices of the arguments set at each launch.
     int advanceBackupIndex, advanceKickTime, advanceProjectAfterKick, advanceDriftTime, advanceTolerance,
-        advanceNoiseDecay, advanceNoiseScale, advanceRandomIndex, advanceProjectAtEnd, advanceResetFollows, projectOnlyIfNotRigid,
-        freeVelocitiesTolerance, collideKT, collideRandomIndex;
+        advanceNoiseDecay, advanceNoiseScale, advanceRandomIndex, advanceProjectAtEnd, advanceResetFollows,
+        advanceStepIndex, advanceScaleVelocities, projectOnlyIfNotRigid, freeVelocitiesTolerance,
+        freeVelocitiesStepIndex, collideKT, collideRandomIndex;
 };
 
 } // namespace MRattlePlugin

@@ -18,20 +18,19 @@ namespace MRattlePlugin {
 /**
  * A failed step on the device, found without a blocking read inside a step.
  *
- * The device's failure flag (flag()[0]) is set by the kernel that fails; every later kernel
- * that would change the state then does nothing, and the backup kernel (the first of each
- * step) stops copying, so the backups keep the state from before the failed step and
- * flag()[1] the index of that step since the last check. The host learns of it lazily: at
- * the end of every CopyInterval-th step the flag is copied into OpenMM's pinned buffer
- * behind an event, and read when the next copy is queued (the device still has the steps
- * after it queued), so a failure is found at most 2 CopyInterval steps late; the frozen
- * state and the backups wait unchanged meanwhile. OpenMM's other users may reuse the
- * pinned buffer in between, so what is read there is only a hint: a nonzero one is
- * confirmed by a blocking read. The blocking check (synchronize())
- * is made where the state can be read: at the end of each step(n), before checkpoints and
- * kinetic energies, and at reorderings (which read the state anyway). A failure found puts
- * back the state from before the failed step (positions, velocities, box, step count, time)
- * and throws, naming the integrator.
+ * The device's failure flag (flag()[0]) is set by the kernel that fails, to 1 + the index of
+ * its step since the last check (stepIndex()); every later kernel that would change the
+ * state then does nothing, and the backup kernel (the first of each step) stops copying once
+ * an earlier step failed (not when another work group of its own step did), so the backups
+ * keep the state from before the failed step, all of it of that one time. The host learns
+ * of it lazily: at the end of every CopyInterval-th step the flag is copied into host memory
+ * of the plugin's own (HostMemory) behind an event, and read when the next copy is queued
+ * (the device still has the steps after it queued), so a failure is found at most 2
+ * CopyInterval steps late; the frozen state and the backups wait unchanged meanwhile. The
+ * blocking check (synchronize()) is made where the state can be read: at the end of each
+ * step(n), before checkpoints and kinetic energies, and at reorderings (which read the state
+ * anyway). A failure found puts back the state from before the failed step (positions,
+ * velocities, box, step count, time) and throws, naming the integrator.
  */
 class CommonStepFailure {
 public:
@@ -49,10 +48,25 @@ public:
      * nothing measurable. A failure found later costs only the frozen steps' force work.
      */
     static constexpr int CopyInterval = 16;
+    /**
+     * Where the flag's asynchronous copy goes: host memory of the plugin's own, never
+     * OpenMM's pinned buffer (which OpenMM overwrites: CUDA's energy sum lands there). Plain
+     * memory unless a platform sets its own: OpenCL copies into any host memory without
+     * waiting, CUDA only into page-locked memory (platforms/cuda sets cuMemHostAlloc's).
+     * Each platform's plugin links its own copy of this class, so the setting is per platform.
+     */
+    struct HostMemory {
+        void* (*allocate)(size_t bytes);
+        void (*release)(void* memory);
+    };
+    static void setHostMemory(const HostMemory& memory);
     CommonStepFailure(OpenMM::ComputeContext& cc, const std::string& integratorName);
+    ~CommonStepFailure();
+    CommonStepFailure(const CommonStepFailure&) = delete;
+    CommonStepFailure& operator=(const CommonStepFailure&) = delete;
     /** Allocate the flag and the backups (OpenMM's arrays must exist). */
     void initialize();
-    /** The flag: [0] nonzero once a step failed, [1] the failed step's index since the last check. */
+    /** The flag: 0, or 1 + the index of the failed step since the last check. */
     OpenMM::ComputeArray& flag() {
         return failure;
     }
@@ -68,10 +82,14 @@ public:
     }
     /**
      * A step begins (before its backup kernel): returns the step's index since the last
-     * check, which the backup kernel writes into flag()[1]. The box is recorded if a
+     * check, which its kernels record in the flag if they fail. The box is recorded if a
      * barostat changed it since the last step.
      */
     int stepStarted(OpenMM::ContextImpl& context, double stepSize);
+    /** What a failing kernel records: the index of the step begun last (0 before the first since the last check). */
+    int stepIndex() const {
+        return unchecked > 0 ? unchecked - 1 : 0;
+    }
     /** A step's kernels are queued: every CopyInterval-th step, the lazy check of the last copy, then a new copy of the flag. */
     void stepQueued();
     /** The blocking check: put the state back and throw if a step failed. No-op without unchecked steps. */
@@ -96,8 +114,6 @@ private:
         int step;
         OpenMM::Vec3 box[3];
     };
-    /** Whether the flag is set, by a blocking read. */
-    bool failed();
     /** The state, box, step count and time before the failed step, from the backups in the current order. */
     void restore(int failedStep);
     /** The same after a reordering: the backups permuted on the host, the cell offsets' change undone. */
@@ -113,7 +129,10 @@ private:
     const std::string integratorName;
     OpenMM::ComputeArray failure, positions, corrections, velocities;
     OpenMM::ComputeEvent copied;
-    bool copyQueued = false;
+    /** The flag's last asynchronous copy (HostMemory), read once the event has passed. */
+    int* copy = nullptr;
+    /** copyQueued: a copy not read yet; copyEnqueued: a copy was ever queued (the destructor waits for it). */
+    bool copyQueued = false, copyEnqueued = false;
     int stepsSinceCopy = 0;
     /** Steps since the last check, their step size, and the step count and time at it. */
     int unchecked = 0;
@@ -131,6 +150,12 @@ private:
     std::vector<StateAndBackup> states;
     /** A failure found at a reordering, where nothing may throw: thrown by the next check. */
     std::string deferred;
+    /**
+     * Test hook (environment variable MRATTLE_TEST_FAIL_AT_STEP, read at initialize()): the
+     * step that begins at this step count finds the flag set before its first kernel, as if
+     * a work group of that step had failed first; -1: none.
+     */
+    long long testFailAtStep = -1;
 };
 
 } // namespace MRattlePlugin

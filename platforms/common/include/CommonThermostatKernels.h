@@ -1,6 +1,7 @@
 #ifndef MRATTLE_COMMON_THERMOSTAT_KERNELS_H_
 #define MRATTLE_COMMON_THERMOSTAT_KERNELS_H_
 
+#include "CommonKernelArguments.h"
 #include "CommonRigidBodyStepKernel.h"
 #include "MRattleBussiIntegrator.h"
 #include "MRattleNoseHooverIntegrator.h"
@@ -9,19 +10,20 @@
 
 namespace MRattlePlugin {
 
-/** The number of work items of the thermostat's work group (THERMOSTAT_THREADS in thermostats.cc). */
+/** The number of work items of each work group of the thermostats' kernels (THERMOSTAT_THREADS in thermostats.cc). */
 const int ThermostatThreads = 128;
 /** thermostats.cc with its work-group size: what the thermostats append to the step's program. */
 std::string thermostatSources();
 
 /**
  * Velocity Verlet with M-RATTLE between two half steps of a thermostat that scales every
- * velocity by one factor, on the common compute platforms: the thermostat's half step is
- * one device kernel (thermostats.cc) that sums the kinetic energy, computes the factor and
- * scales, so no step reads anything back to the host. The first half step of each step
- * changes the state before the step's first pass, so it makes the step's backup (the atoms'
- * and the thermostat's) while the failure flag is clear, and CommonStepFailure puts both
- * back when a step fails (found lazily).
+ * velocity by one factor, on the common compute platforms, with nothing read back to the
+ * host (thermostats.cc): each half step sums the kinetic energy over every work group of the
+ * device (sumKineticEnergy()), then one small kernel of the subclass turns the partial sums
+ * into the factor; the first half step's scaling is done by the step's first pass, with the
+ * step's backup of the atoms, the second's by a kernel across the device. The first half step
+ * changes the thermostat's state before that pass, so it backs that state up itself, and
+ * CommonStepFailure puts it back with the atoms when a step fails (found lazily).
  * A subclass supplies the half step and the state.
  */
 template <class StepKernel>
@@ -38,8 +40,20 @@ public:
     void execute(OpenMM::ContextImpl& context, const Integrator& integrator, bool& forcesAreValid) override;
 
 protected:
-    /** The thermostat's half step on the device (nothing when it is uncoupled); the first backs up its state. */
+    /**
+     * The thermostat's factor for every velocity into the dynamics' velocityScale() (called
+     * only when it is coupled): sumKineticEnergy(), then its own kernel, which on the first
+     * half step of a step (first) backs up its state.
+     */
     virtual void halfStep(const Integrator& integrator, bool first) = 0;
+    /**
+     * thermostatPartialSums across the device: twice the kinetic energy, and the squares of
+     * numGaussians - 1 of OpenMM's Gaussian numbers from randomIndex on (random: null when
+     * none are drawn), as partial sums per work group.
+     */
+    void sumKineticEnergy(OpenMM::ArrayInterface* random = nullptr, unsigned int randomIndex = 0, int numGaussians = 0);
+    /** The partial sums' arguments (their array and count), which the subclass's kernel takes first. */
+    void addPartialSums(CommonKernelArguments& arguments);
     /** The System's degrees of freedom, by the plugin's rule (RigidBodyTopology). */
     int degreesOfFreedom() const {
         return bodies.getNumDegreesOfFreedom(this->dynamics.bodyDegreesOfFreedom());
@@ -54,6 +68,11 @@ protected:
 
 private:
     RigidBodyTopology bodies;
+    OpenMM::ComputeKernel partialSumsKernel, scaleKernel;
+    /** Per work group of thermostatPartialSums: twice the kinetic energy and the Gaussians' squares; and the number of groups. */
+    OpenMM::ComputeArray partials, partialCount;
+    int argumentPartialsRandomIndex, argumentPartialsGaussians;
+    bool sharedArgumentsSet = false;
 };
 
 /** MRattleNoseHooverIntegrator on the common compute platforms: the chain lives on the device. */
@@ -81,7 +100,7 @@ private:
     OpenMM::ComputeProgram program;
     OpenMM::ComputeKernel chainKernel;
     OpenMM::ComputeArray chainPosition, chainVelocity, positionBackup, velocityBackup, weights;
-    int argumentDof, argumentKT, argumentFrequency, argumentHalfStep, argumentBackUp;
+    int argumentDof, argumentKT, argumentFrequency, argumentHalfStep, argumentBackUp, argumentStepIndex;
     bool argumentsSet = false;
 };
 
@@ -108,7 +127,7 @@ private:
     OpenMM::ComputeProgram program;
     OpenMM::ComputeKernel rescaleKernel;
     OpenMM::ComputeArray work, workBackup;
-    int argumentRandomIndex, argumentDof, argumentKT, argumentC, argumentBackUp;
+    int argumentRandomIndex, argumentDof, argumentKT, argumentC, argumentBackUp, argumentStepIndex;
     bool argumentsSet = false;
 };
 

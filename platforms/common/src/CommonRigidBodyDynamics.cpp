@@ -142,6 +142,8 @@ void CommonRigidBodyDynamics::initialize(const System& system, const RigidBodyTo
     bodyReference.upload(vector<mm_double4>(bodyReference.getSize(), mm_double4(0, 0, 0, 0)), true);
     bodyOrientation.initialize(cc, 9 * std::max(1, numBodies), mixedSize, "mrattleBodyOrientation");
     bodyOrientation.upload(identityOrientations(), true);
+    velocityScaleArray.initialize(cc, 1, mixedSize, "mrattleVelocityScale");
+    velocityScaleArray.upload(vector<double>(1, 1.0), true);
     stepFailure.initialize();
     mapAtoms();
     cc.addReorderListener(new ReorderListener(*this));
@@ -235,6 +237,8 @@ void CommonRigidBodyDynamics::advance(const Pass& pass) {
                               (unsigned int) cc.getIntegrationUtilities().prepareRandomNumbers(cc.getPaddedNumAtoms()));
     advanceGroups->setArg(advanceProjectAtEnd, pass.projectAtEnd ? 1 : 0);
     advanceGroups->setArg(advanceResetFollows, pass.resetFollows ? 1 : 0);
+    advanceGroups->setArg(advanceStepIndex, stepFailure.stepIndex());
+    advanceGroups->setArg(advanceScaleVelocities, pass.scaleVelocities ? 1 : 0);
     if (numGroups > 0)
         advanceGroups->execute(numGroups);
     backupStepIndex = -1;  // once per step
@@ -270,6 +274,7 @@ void CommonRigidBodyDynamics::project(double tolerance, bool onlyIfNotRigid) {
     }
     if (numClusters > 0) {
         setMixedArg(constrainFreeVelocities, freeVelocitiesTolerance, tolerance);
+        constrainFreeVelocities->setArg(freeVelocitiesStepIndex, stepFailure.stepIndex());
         constrainFreeVelocities->execute(numClusters);
     }
 }

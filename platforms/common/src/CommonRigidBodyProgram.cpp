@@ -82,14 +82,6 @@ ComputeProgram CommonRigidBodyDynamics::compileWith(const std::string& sources) 
                              programDefines(cc.getUseDoublePrecision(), cc.getUseMixedPrecision()));
 }
 
-void CommonRigidBodyDynamics::addBackupArguments(CommonKernelArguments& arguments) {
-    arguments.add(cc.getPosq());
-    arguments.add(cc.getUseMixedPrecision() ? cc.getPosqCorrection() : cc.getPosq());
-    arguments.add(stepFailure.posqBackup());
-    arguments.add(stepFailure.correctionBackup());
-    arguments.add(stepFailure.velmBackup());
-}
-
 void CommonRigidBodyDynamics::addMixedArg(ComputeKernel& kernel, double value) const {
     if (cc.getUseDoublePrecision() || cc.getUseMixedPrecision())
         kernel->addArg(value);
@@ -152,6 +144,9 @@ void CommonRigidBodyDynamics::setKernelArguments() {
     advanceProjectAtEnd = advance.add(0);
     advanceResetFollows = advance.add(0);
     advance.add(stepFailure.flag());
+    advanceStepIndex = advance.add(0);
+    advance.add(velocityScaleArray);
+    advanceScaleVelocities = advance.add(0);
 
     CommonKernelArguments projection(projectBodies, doubleMixed);
     projection.add(numBodies);
@@ -173,6 +168,7 @@ void CommonRigidBodyDynamics::setKernelArguments() {
     freeVelocities.add(cc.getVelm());
     freeVelocitiesTolerance = freeVelocities.addMixed(0.0);
     freeVelocities.add(stepFailure.flag());
+    freeVelocitiesStepIndex = freeVelocities.add(0);
 
     if (hasAndersen) {
         CommonKernelArguments collide(collideBodies, doubleMixed);

@@ -1,6 +1,7 @@
 #include "CommonStepFailure.h"
 #include "openmm/OpenMMException.h"
 #include "openmm/internal/ContextImpl.h"
+#include <cstdlib>
 
 using namespace MRattlePlugin;
 using namespace OpenMM;
@@ -43,20 +44,52 @@ void uploadFromDouble(ArrayInterface& array, const vector<mm_double4>& values) {
     }
 }
 
+void* allocatePlain(size_t bytes) {
+    return std::calloc(1, bytes);
+}
+
+void releasePlain(void* memory) {
+    std::free(memory);
+}
+
+CommonStepFailure::HostMemory hostMemory = {allocatePlain, releasePlain};
+
 } // namespace
+
+void CommonStepFailure::setHostMemory(const HostMemory& memory) {
+    hostMemory = memory;
+}
 
 CommonStepFailure::CommonStepFailure(ComputeContext& cc, const std::string& integratorName)
     : cc(cc), integratorName(integratorName) {
 }
 
+CommonStepFailure::~CommonStepFailure() {
+    if (copy == nullptr)
+        return;
+    try {
+        if (copyEnqueued)
+            copied->wait();  // the device may still be writing into it
+    } catch (...) {
+    }
+    hostMemory.release(copy);
+}
+
 void CommonStepFailure::initialize() {
-    failure.initialize<int>(cc, 2, "mrattleFailure");
-    failure.upload(vector<int>(2, 0));
+    failure.initialize<int>(cc, 1, "mrattleFailure");
+    failure.upload(vector<int>(1, 0));
+    if (const char* step = std::getenv("MRATTLE_TEST_FAIL_AT_STEP"))
+        testFailAtStep = std::atoll(step);
     positions.initialize(cc, cc.getPaddedNumAtoms(), cc.getPosq().getElementSize(), "mrattlePosqBackup");
     if (cc.getUseMixedPrecision())
         corrections.initialize(cc, cc.getPaddedNumAtoms(), cc.getPosq().getElementSize(), "mrattleCorrectionBackup");
     velocities.initialize(cc, cc.getPaddedNumAtoms(), cc.getVelm().getElementSize(), "mrattleVelmBackup");
     copied = cc.createEvent();
+    if (copy == nullptr) {
+        copy = (int*) hostMemory.allocate(sizeof(int));
+        if (copy == nullptr)
+            throw OpenMMException(integratorName + ": no host memory for the failure flag's copy");
+    }
     rememberOrder();
 }
 
@@ -73,6 +106,8 @@ int CommonStepFailure::stepStarted(ContextImpl& context, double size) {
     cc.getPeriodicBoxVectors(box.box[0], box.box[1], box.box[2]);
     if (boxes.empty() || !sameBox(boxes.back().box, box.box))
         boxes.push_back(box);
+    if (cc.getStepCount() == testFailAtStep)
+        failure.upload(vector<int>(1, unchecked + 1));
     return unchecked++;
 }
 
@@ -82,23 +117,16 @@ void CommonStepFailure::stepQueued() {
     if (++stepsSinceCopy < CopyInterval)
         return;
     stepsSinceCopy = 0;
-    int* hint = (int*) cc.getPinnedBuffer();
     if (copyQueued) {
         // The last copy's flag: the device has the steps since still queued, so it stays busy.
         copied->wait();
         copyQueued = false;
-        if (hint[0] != 0)
-            synchronize();  // confirmed (or not) by a blocking read: the pinned buffer is shared
+        if (copy[0] != 0)
+            synchronize();  // puts the state back and throws
     }
-    failure.download(hint, false);
+    failure.download(copy, false);
     copied->enqueue();
-    copyQueued = true;
-}
-
-bool CommonStepFailure::failed() {
-    int values[2];
-    failure.download(values);
-    return values[0] != 0;
+    copyQueued = copyEnqueued = true;
 }
 
 void CommonStepFailure::synchronize() {
@@ -111,14 +139,15 @@ void CommonStepFailure::synchronize() {
     }
     if (unchecked == 0)
         return;
-    int values[2];
-    failure.download(values);
-    if (values[0] == 0) {
+    int failed;
+    failure.download(&failed);
+    if (failed == 0) {
         checked();
         return;
     }
-    const long long failedStepCount = stepCountAtCheck + values[1];
-    restore(values[1]);
+    const int failedStep = failed - 1;
+    const long long failedStepCount = stepCountAtCheck + failedStep;
+    restore(failedStep);
     checked();
     throw OpenMMException(message(failedStepCount));
 }
@@ -127,14 +156,15 @@ void CommonStepFailure::atomsReordered() {
     // OpenMM reorders only at the end of a step; its reorder has downloaded the state, so
     // this blocking read costs no extra wait.
     if (unchecked > 0 && deferred.empty()) {
-        int values[2];
-        failure.download(values);
-        if (values[0] != 0) {
-            const long long failedStepCount = stepCountAtCheck + values[1];
-            restoreClock(values[1]);
+        int failed;
+        failure.download(&failed);
+        if (failed != 0) {
+            const int failedStep = failed - 1;
+            const long long failedStepCount = stepCountAtCheck + failedStep;
+            restoreClock(failedStep);
             restoreStates();
             restoreAcrossReorder();
-            failure.upload(vector<int>(2, 0));
+            failure.upload(vector<int>(1, 0));
             deferred = message(failedStepCount);  // a listener must not throw: the next check does
         }
     }
@@ -147,7 +177,7 @@ void CommonStepFailure::rememberOrder() {
 }
 
 void CommonStepFailure::reset() {
-    failure.upload(vector<int>(2, 0));
+    failure.upload(vector<int>(1, 0));
     copyQueued = false;
     deferred.clear();
     checked();
@@ -186,7 +216,7 @@ void CommonStepFailure::restore(int failedStep) {
     if (cc.getUseMixedPrecision())
         corrections.copyTo(cc.getPosqCorrection());
     velocities.copyTo(cc.getVelm());
-    failure.upload(vector<int>(2, 0));
+    failure.upload(vector<int>(1, 0));
 }
 
 void CommonStepFailure::restoreAcrossReorder() {

@@ -26,22 +26,77 @@ void CommonVelocityScalingStepKernel<StepKernel>::execute(ContextImpl& context, 
                                                           bool& forcesAreValid) {
     CommonRigidBodyDynamics& dynamics = this->dynamics;
     ContextSelector selector(dynamics.computeContext());
-    const double h = integrator.getStepSize(), tolerance = integrator.getConstraintTolerance();
-    // The thermostat's half step, then velocity Verlet (half kick, drift and reset, new
-    // forces, half kick and projection), then the thermostat's second half step.
+    const double h = integrator.getStepSize();
+    // The thermostat's half step, then velocity Verlet (its scaling, half kick, drift and
+    // reset: one pass; new forces; half kick and projection: one pass), then the
+    // thermostat's second half step. Uncoupled: MRattleIntegrator's step (as on the host).
+    const bool coupled = integrator.getCollisionFrequency() != 0;
     dynamics.beginStep(context, integrator, forcesAreValid);
-    halfStep(integrator, true);
-    dynamics.driftAndReset(0.5 * h, h, tolerance);
+    CommonRigidBodyDynamics::Pass first;
+    if (coupled) {
+        halfStep(integrator, true);
+        first.scaleVelocities = true;
+    }
+    first.kickTime = 0.5 * h;
+    first.driftTime = h;
+    dynamics.advance(first);
     dynamics.computeForces(context, integrator, forcesAreValid);
-    dynamics.kick(0.5 * h);
-    dynamics.project(tolerance, false);
-    halfStep(integrator, false);
+    CommonRigidBodyDynamics::Pass second;
+    second.kickTime = 0.5 * h;
+    second.projectAfterKick = true;
+    dynamics.advance(second);
+    if (coupled) {
+        halfStep(integrator, false);  // its sumKineticEnergy() has set scaleKernel's arguments
+        scaleKernel->execute(dynamics.computeContext().getNumAtoms());
+    }
     dynamics.endStep(h, forcesAreValid);
 }
 
 template <class StepKernel>
+void CommonVelocityScalingStepKernel<StepKernel>::sumKineticEnergy(ArrayInterface* random, unsigned int randomIndex,
+                                                                   int numGaussians) {
+    ComputeContext& cc = this->dynamics.computeContext();
+    if (!sharedArgumentsSet) {
+        CommonKernelArguments sums(partialSumsKernel, doubleMixed(cc));
+        sums.add(cc.getNumAtoms());
+        sums.add(cc.getVelm());
+        if (random != nullptr)
+            sums.add(*random);
+        else
+            sums.add(partials);  // unread: no Gaussians
+        argumentPartialsRandomIndex = sums.add(0u);
+        argumentPartialsGaussians = sums.add(0);
+        sums.add(partials);
+        sums.add(partialCount);
+        CommonKernelArguments scale(scaleKernel, doubleMixed(cc));
+        scale.add(cc.getNumAtoms());
+        scale.add(cc.getVelm());
+        scale.add(this->dynamics.velocityScale());
+        scale.add(this->dynamics.failureFlag());
+        sharedArgumentsSet = true;
+    }
+    partialSumsKernel->setArg(argumentPartialsRandomIndex, randomIndex);
+    partialSumsKernel->setArg(argumentPartialsGaussians, numGaussians);
+    partialSumsKernel->execute(cc.getNumAtoms(), ThermostatThreads);
+}
+
+template <class StepKernel>
+void CommonVelocityScalingStepKernel<StepKernel>::addPartialSums(CommonKernelArguments& arguments) {
+    arguments.add(partials);
+    arguments.add(partialCount);
+}
+
+template <class StepKernel>
 ComputeProgram CommonVelocityScalingStepKernel<StepKernel>::compileThermostats() {
-    return this->dynamics.compileWith(thermostatSources());
+    ComputeContext& cc = this->dynamics.computeContext();
+    ComputeProgram program = this->dynamics.compileWith(thermostatSources());
+    partialSumsKernel = program->createKernel("thermostatPartialSums");
+    scaleKernel = program->createKernel("scaleVelocities");
+    // A launch has at most getNumThreadBlocks() work groups (OpenMM's rule, both platforms).
+    initializeMixedArray(partials, 2 * cc.getNumThreadBlocks(), "mrattleThermostatPartialSums");
+    partialCount.initialize<int>(cc, 1, "mrattleThermostatPartialCount");
+    partialCount.upload(vector<int>(1, 0));
+    return program;
 }
 
 template <class StepKernel>
@@ -93,13 +148,11 @@ void CommonIntegrateMRattleNoseHooverStepKernel::initializeIntegrator(const Syst
 }
 
 void CommonIntegrateMRattleNoseHooverStepKernel::halfStep(const MRattleNoseHooverIntegrator& integrator, bool first) {
-    if (integrator.getCollisionFrequency() == 0)
-        return;  // the chain does not move: MRattleIntegrator's step (as on the host)
     ComputeContext& cc = dynamics.computeContext();
+    sumKineticEnergy();
     if (!argumentsSet) {
         CommonKernelArguments arguments(chainKernel, doubleMixed(cc));
-        arguments.add(cc.getNumAtoms());
-        arguments.add(cc.getVelm());
+        addPartialSums(arguments);
         arguments.add(integrator.getChainLength());
         arguments.add(chainPosition);
         arguments.add(chainVelocity);
@@ -110,18 +163,20 @@ void CommonIntegrateMRattleNoseHooverStepKernel::halfStep(const MRattleNoseHoove
         argumentKT = arguments.addMixed(0.0);
         argumentFrequency = arguments.addMixed(0.0);
         argumentHalfStep = arguments.addMixed(0.0);
+        arguments.add(dynamics.velocityScale());
         arguments.add(dynamics.failureFlag());
-        dynamics.addBackupArguments(arguments);
         argumentBackUp = arguments.add(-1);
         arguments.add(positionBackup);
         arguments.add(velocityBackup);
+        argumentStepIndex = arguments.add(0);
         argumentsSet = true;
     }
     dynamics.setMixedArg(chainKernel, argumentDof, degreesOfFreedom());
     dynamics.setMixedArg(chainKernel, argumentKT, BOLTZ * integrator.getTemperature());
     dynamics.setMixedArg(chainKernel, argumentFrequency, integrator.getCollisionFrequency());
     dynamics.setMixedArg(chainKernel, argumentHalfStep, 0.5 * integrator.getStepSize());
-    chainKernel->setArg(argumentBackUp, first ? dynamics.takeStepBackup() : -1);
+    chainKernel->setArg(argumentBackUp, first ? dynamics.stepBackupIndex() : -1);
+    chainKernel->setArg(argumentStepIndex, dynamics.failureStepIndex());
     chainKernel->execute(ThermostatThreads, ThermostatThreads);
 }
 
@@ -183,33 +238,34 @@ void CommonIntegrateMRattleBussiStepKernel::initializeIntegrator(const System& s
 }
 
 void CommonIntegrateMRattleBussiStepKernel::halfStep(const MRattleBussiIntegrator& integrator, bool first) {
-    if (integrator.getCollisionFrequency() == 0)
-        return;  // no coupling: MRattleIntegrator's step, nothing drawn (as on the host)
     ComputeContext& cc = dynamics.computeContext();
     IntegrationUtilities& integration = cc.getIntegrationUtilities();
+    // dof Gaussian numbers: at most 3 per atom, so the 4 per padded atom of one draw suffice.
+    const int dof = degreesOfFreedom();
+    const unsigned int randomIndex = integration.prepareRandomNumbers(cc.getPaddedNumAtoms());
+    sumKineticEnergy(&integration.getRandom(), randomIndex, dof);
     if (!argumentsSet) {
         CommonKernelArguments arguments(rescaleKernel, doubleMixed(cc));
-        arguments.add(cc.getNumAtoms());
-        arguments.add(cc.getVelm());
+        addPartialSums(arguments);
         arguments.add(integration.getRandom());
         argumentRandomIndex = arguments.add(0u);
         argumentDof = arguments.add(0);
         argumentKT = arguments.addMixed(0.0);
         argumentC = arguments.addMixed(0.0);
         arguments.add(work);
+        arguments.add(dynamics.velocityScale());
         arguments.add(dynamics.failureFlag());
-        dynamics.addBackupArguments(arguments);
         argumentBackUp = arguments.add(-1);
         arguments.add(workBackup);
+        argumentStepIndex = arguments.add(0);
         argumentsSet = true;
     }
-    // dof Gaussian numbers: at most 3 per atom, so the 4 per padded atom of one draw suffice.
-    const int dof = degreesOfFreedom();
-    rescaleKernel->setArg(argumentRandomIndex, (unsigned int) integration.prepareRandomNumbers(cc.getPaddedNumAtoms()));
+    rescaleKernel->setArg(argumentRandomIndex, randomIndex);
     rescaleKernel->setArg(argumentDof, dof);
     dynamics.setMixedArg(rescaleKernel, argumentKT, BOLTZ * integrator.getTemperature());
     dynamics.setMixedArg(rescaleKernel, argumentC, std::exp(-integrator.getCollisionFrequency() * 0.5 * integrator.getStepSize()));
-    rescaleKernel->setArg(argumentBackUp, first ? dynamics.takeStepBackup() : -1);
+    rescaleKernel->setArg(argumentBackUp, first ? dynamics.stepBackupIndex() : -1);
+    rescaleKernel->setArg(argumentStepIndex, dynamics.failureStepIndex());
     rescaleKernel->execute(ThermostatThreads, ThermostatThreads);
 }
 

@@ -5,6 +5,7 @@
  * registerCommonKernels); this file only finds the device context.
  */
 #include "CommonMRattleKernelFactory.h"
+#include "CommonStepFailure.h"
 #include "internal/OpenMMVersionCheck.h"
 #include "openmm/KernelFactory.h"
 #include "openmm/OpenMMException.h"
@@ -17,6 +18,16 @@
 using namespace OpenMM;
 
 namespace {
+
+/** Page-locked host memory (as CudaContext's pinned buffer): an asynchronous copy into pageable memory waits for the stream. */
+void* allocatePageLocked(size_t bytes) {
+    void* memory = nullptr;
+    return cuMemHostAlloc(&memory, bytes, CU_MEMHOSTALLOC_PORTABLE) == CUDA_SUCCESS ? memory : nullptr;
+}
+
+void releasePageLocked(void* memory) {
+    cuMemFreeHost(memory);
+}
 
 class CudaMRattleKernelFactory : public KernelFactory {
 public:
@@ -36,6 +47,7 @@ public:
  */
 void registerOnCuda() {
     MRattlePlugin::checkOpenMMVersion(Platform::getOpenMMVersion());
+    MRattlePlugin::CommonStepFailure::setHostMemory({allocatePageLocked, releasePageLocked});
     for (int i = 0; i < Platform::getNumPlatforms(); i++) {
         Platform& platform = Platform::getPlatform(i);
         if (platform.getName() == "CUDA")

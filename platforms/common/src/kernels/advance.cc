@@ -4,7 +4,8 @@
  * (massless ones included, for the backup). Work items 0..numBodies-1 take the bodies,
  * then the clusters, then the free atoms. Each phase is done if asked for, in this order:
  *
- *   backup (backupStepIndex >= 0; the index goes into failure[1]), kick (kickTime != 0),
+ *   backup (backupStepIndex >= 0: the step's first pass), a thermostat's scaling of the
+ *   velocities by velocityScale[0] (scaleVelocities), kick (kickTime != 0),
  *   projection (projectAfterKick), drift and reset (driftTime != 0: M-RATTLE's reset for a
  *   body, SHAKE for a cluster, a drift for a free atom), Langevin friction and noise and a
  *   projection (noiseDecay != 1; at zero temperature noiseScale is 0), projection (projectAtEnd).
@@ -15,7 +16,9 @@
  * reset is the same to round-off, for a projection's work less.
  *
  * A group's phases read and write only its own atoms, so no phase waits for another group.
- * A failure of any group sets failure[0]; the host puts back the backup (CommonStepFailure).
+ * A failure of any group sets failure[0] to 1 + stepIndex; the host puts back the backup
+ * (CommonStepFailure). A work item that finds its own step failed when the pass is the
+ * step's backup still backs up its groups (and does nothing else), so the backup is of one time.
  *
  * (See bodyMath.cc for the program's layout and the failure flag.)
  */
@@ -35,16 +38,23 @@ INLINE_DEVICE bool projectCluster(int kind, int index, GLOBAL const int* RESTRIC
                          tolerance);
 }
 
-/** The backup (if asked for) and the kick (if kickScale != 0) of a group's atoms; false if a kicked velocity is not finite. */
+/**
+ * The backup (if asked for), the scaling (if velocityFactor != 1) and the kick (if kickScale
+ * != 0) of a group's atoms; false if a kicked velocity is not finite.
+ */
 INLINE_DEVICE bool backupAndKick(int start, int end, GLOBAL const int* RESTRICT atoms, bool backup,
         GLOBAL real4* RESTRICT posq, GLOBAL real4* RESTRICT posqCorrection, GLOBAL mixed4* RESTRICT velm,
         GLOBAL real4* RESTRICT posqBackup, GLOBAL real4* RESTRICT correctionBackup, GLOBAL mixed4* RESTRICT velmBackup,
-        mixed kickScale, GLOBAL const mm_long* RESTRICT force, int paddedNumAtoms) {
+        mixed velocityFactor, mixed kickScale, GLOBAL const mm_long* RESTRICT force, int paddedNumAtoms) {
     bool ok = true;
     for (int k = start; k < end; k++) {
         const int atom = atoms[k];
         if (backup)
             backupAtom(atom, posq, posqCorrection, velm, posqBackup, correctionBackup, velmBackup);
+        if (velocityFactor != 1) {
+            const mixed4 v = velm[atom];
+            velm[atom] = make_mixed4(velocityFactor*v.x, velocityFactor*v.y, velocityFactor*v.z, v.w);
+        }
         if (kickScale != 0)
             ok = kickAtom(atom, kickScale, force, paddedNumAtoms, velm) && ok;
     }
@@ -63,11 +73,11 @@ INLINE_DEVICE bool advanceBody(int body, int start, int end, GLOBAL const int* R
         GLOBAL mixed4* RESTRICT reference, GLOBAL mixed* RESTRICT orientation, GLOBAL real4* RESTRICT posq,
         GLOBAL real4* RESTRICT posqCorrection, GLOBAL mixed4* RESTRICT velm, GLOBAL const mm_long* RESTRICT force,
         int paddedNumAtoms, bool backup, GLOBAL real4* RESTRICT posqBackup, GLOBAL real4* RESTRICT correctionBackup,
-        GLOBAL mixed4* RESTRICT velmBackup, mixed kickScale, bool projectAfterKick, mixed driftTime, mixed noiseDecay,
-        mixed noiseScale, GLOBAL const float4* RESTRICT random, unsigned int randomIndex, bool projectAtEnd,
-        bool resetFollows) {
+        GLOBAL mixed4* RESTRICT velmBackup, mixed velocityFactor, mixed kickScale, bool projectAfterKick,
+        mixed driftTime, mixed noiseDecay, mixed noiseScale, GLOBAL const float4* RESTRICT random,
+        unsigned int randomIndex, bool projectAtEnd, bool resetFollows) {
     bool ok = backupAndKick(start, end, bodyAtoms, backup, posq, posqCorrection, velm, posqBackup, correctionBackup,
-                            velmBackup, kickScale, force, paddedNumAtoms);
+                            velmBackup, velocityFactor, kickScale, force, paddedNumAtoms);
     if (driftTime != 0)  // no projection before the reset: see above
         ok = resetBody(body, start, end, bodyAtoms, reference, orientation, shape, driftTime, posq, posqCorrection,
                        velm) && ok;
@@ -95,12 +105,14 @@ KERNEL void advanceGroups(int numBodies, int numClusters, int numFree, GLOBAL co
         GLOBAL real4* RESTRICT posqBackup, GLOBAL real4* RESTRICT correctionBackup, GLOBAL mixed4* RESTRICT velmBackup,
         int backupStepIndex, mixed kickTime, int projectAfterKick, mixed driftTime, mixed tolerance, mixed noiseDecay,
         mixed noiseScale, GLOBAL const float4* RESTRICT random, unsigned int randomIndex, int projectAtEnd,
-        int resetFollows, GLOBAL int* RESTRICT failure) {
-    if (failure[0] != 0)
+        int resetFollows, GLOBAL int* RESTRICT failure, int stepIndex, GLOBAL const mixed* RESTRICT velocityScale,
+        int scaleVelocities) {
+    const int failed = failure[0];
+    if (skipAfterFailure(failed, backupStepIndex))
         return;
-    if (backupStepIndex >= 0 && GLOBAL_ID == 0)
-        failure[1] = backupStepIndex;
+    const bool onlyBackup = failed != 0;  // another group of this step failed: only its backup
     const mixed kickScale = kickTime/(mixed) 0x100000000;
+    const mixed velocityFactor = scaleVelocities ? velocityScale[0] : (mixed) 1;
     const int numGroups = numBodies + numClusters + numFree;
     for (int group = GLOBAL_ID; group < numGroups; group += GLOBAL_SIZE) {
         int kind, index, start, end;
@@ -126,15 +138,20 @@ KERNEL void advanceGroups(int numBodies, int numClusters, int numFree, GLOBAL co
             end = index + 1;
             atoms = freeAtoms;
         }
+        if (onlyBackup) {
+            backupAndKick(start, end, atoms, true, posq, posqCorrection, velm, posqBackup, correctionBackup, velmBackup,
+                          1, 0, force, paddedNumAtoms);
+            continue;
+        }
         bool ok;
         if (kind == GROUP_BODY)
             ok = advanceBody(index, start, end, atoms, bodyShape[index], bodyReference, bodyOrientation, posq,
                              posqCorrection, velm, force, paddedNumAtoms, backupStepIndex >= 0, posqBackup,
-                             correctionBackup, velmBackup, kickScale, projectAfterKick != 0, driftTime, noiseDecay,
-                             noiseScale, random, randomIndex, projectAtEnd != 0, resetFollows != 0);
+                             correctionBackup, velmBackup, velocityFactor, kickScale, projectAfterKick != 0, driftTime,
+                             noiseDecay, noiseScale, random, randomIndex, projectAtEnd != 0, resetFollows != 0);
         else {
             ok = backupAndKick(start, end, atoms, backupStepIndex >= 0, posq, posqCorrection, velm, posqBackup,
-                               correctionBackup, velmBackup, kickScale, force, paddedNumAtoms);
+                               correctionBackup, velmBackup, velocityFactor, kickScale, force, paddedNumAtoms);
             if (projectAfterKick)
                 ok = projectCluster(kind, index, clusterStart, constraintAtoms, tolerance, posq, posqCorrection, velm) && ok;
             if (driftTime != 0) {
@@ -152,6 +169,6 @@ KERNEL void advanceGroups(int numBodies, int numClusters, int numFree, GLOBAL co
                 ok = projectCluster(kind, index, clusterStart, constraintAtoms, tolerance, posq, posqCorrection, velm) && ok;
         }
         if (!ok)
-            recordFailure(failure);
+            recordFailure(failure, stepIndex);
     }
 }

@@ -7,10 +7,12 @@
  * arithmetic is in 'mixed' precision (double in the mixed and double modes). Constants
  * shared with the host (iteration limits, tolerances) come from the host as defines.
  *
- * failure[0] holds 0, or 1 once a reset, a constraint or a velocity of a step failed:
- * every kernel that would change the state then does nothing, until the host finds it (one
- * step late, or at the end of step(n): CommonStepFailure.h) and puts back the state from
- * before that step, whose index backupState keeps in failure[1].
+ * failure[0] holds 0, or 1 + the index of the step (since the host's last check) in which a
+ * reset, a constraint or a velocity failed: every kernel that would change the state then
+ * does nothing, but for the backup of that same step (a work group backs up its atoms
+ * whatever another group of its launch found, so the backup is of one time), until the host
+ * finds it (lazily, or at the end of step(n): CommonStepFailure.h) and puts back the state
+ * from before that step.
  */
 
 /*
@@ -122,9 +124,17 @@ INLINE_DEVICE bool isFiniteVelocity(mixed4 v) {
     return v.x*v.x + v.y*v.y + v.z*v.z <= LARGEST_SPEED*LARGEST_SPEED;
 }
 
-/** Every work item of one launch that fails writes the same value, so no atomic is needed. */
-INLINE_DEVICE void recordFailure(GLOBAL int* RESTRICT failure) {
-    failure[0] = 1;
+/** Every work item of one launch that fails writes the same value (its step's), so no atomic is needed. */
+INLINE_DEVICE void recordFailure(GLOBAL int* RESTRICT failure, int stepIndex) {
+    failure[0] = stepIndex + 1;
+}
+
+/**
+ * Whether a work item does nothing, from failure[0] as it read it once: a step failed, unless
+ * this launch makes the backup of that very step (backupStepIndex >= 0), which it then still makes.
+ */
+INLINE_DEVICE bool skipAfterFailure(int failed, int backupStepIndex) {
+    return failed != 0 && failed != backupStepIndex + 1;
 }
 
 /** velocity += scale f / m for one atom (scale: the kick's time over the force buffer's fixed-point unit). */

@@ -85,11 +85,11 @@ INLINE_DEVICE bool rattleCluster(int constraintStart, int constraintEnd, GLOBAL 
 KERNEL void constrainFreeVelocities(int numClusters, GLOBAL const int* RESTRICT clusterStart,
         GLOBAL const int2* RESTRICT constraintAtoms, GLOBAL const real4* RESTRICT posq,
         GLOBAL const real4* RESTRICT posqCorrection, GLOBAL mixed4* RESTRICT velm, mixed tolerance,
-        GLOBAL int* RESTRICT failure) {
+        GLOBAL int* RESTRICT failure, int stepIndex) {
     if (failure[0] != 0)
         return;
     for (int cluster = GLOBAL_ID; cluster < numClusters; cluster += GLOBAL_SIZE)
         if (!rattleCluster(clusterStart[cluster], clusterStart[cluster+1], constraintAtoms, posq, posqCorrection, velm,
                            tolerance))
-            recordFailure(failure);
+            recordFailure(failure, stepIndex);
 }
