@@ -68,10 +68,6 @@ public:
      */
     double computeHeatBathEnergy();
 
-protected:
-    std::string getStepKernelName() const override;
-    void executeStep(OpenMM::Kernel& kernel, OpenMM::ContextImpl& context, bool& forcesAreValid) override;
-
 private:
     double temperature, collisionFrequency;
     int randomNumberSeed = 0;

@@ -24,9 +24,6 @@ public:
      * @param stepSize  the step size in picoseconds
      */
     explicit MRattleIntegrator(double stepSize);
-protected:
-    std::string getStepKernelName() const override;
-    void executeStep(OpenMM::Kernel& kernel, OpenMM::ContextImpl& context, bool& forcesAreValid) override;
 };
 
 } // namespace MRattlePlugin

@@ -66,10 +66,6 @@ public:
         return getStepSize() / 2;
     }
 
-protected:
-    std::string getStepKernelName() const override;
-    void executeStep(OpenMM::Kernel& kernel, OpenMM::ContextImpl& context, bool& forcesAreValid) override;
-
 private:
     double temperature, friction;
     int randomNumberSeed = 0;

@@ -69,10 +69,6 @@ public:
      */
     double computeHeatBathEnergy();
 
-protected:
-    std::string getStepKernelName() const override;
-    void executeStep(OpenMM::Kernel& kernel, OpenMM::ContextImpl& context, bool& forcesAreValid) override;
-
 private:
     double temperature, collisionFrequency;
     int chainLength, numMTS, numYoshidaSuzuki;

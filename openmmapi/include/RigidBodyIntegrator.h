@@ -4,6 +4,7 @@
 #include "RigidBodyTopology.h"
 #include "openmm/Integrator.h"
 #include "openmm/Kernel.h"
+#include "internal/RigidBodyState.h"
 #include "internal/RigidBodyStepState.h"
 #include "internal/windowsExportMRattle.h"
 #include <string>
@@ -11,11 +12,14 @@
 
 namespace MRattlePlugin {
 
+struct RigidBodyIntegratorName;
+class RigidBodyStepKernel;
+
 /**
  * Base of the plugin's rigid-body integrators: the declared bodies, the body topology in
  * effect once bound to a Context, and the glue to the step kernel, which does all the
  * per-particle work (the step, velocity projection, kinetic energy, temperatures,
- * thermostat collisions). A subclass supplies its kernel name.
+ * thermostat collisions). A subclass names itself and its step kernel (IntegratorNames).
  */
 class OPENMM_EXPORT_MRATTLE RigidBodyIntegrator : public OpenMM::Integrator {
 public:
@@ -106,13 +110,12 @@ public:
     void step(int steps) override;
 
 protected:
-    RigidBodyIntegrator();
-    /** The kernel's name; the kernel must derive from RigidBodyKernel. */
-    virtual std::string getStepKernelName() const = 0;
-    /** One step by the kernel, through its own interface (whose execute() takes this integrator's class). */
-    virtual void executeStep(OpenMM::Kernel& kernel, OpenMM::ContextImpl& context, bool& forcesAreValid) = 0;
+    /** @param names  the subclass's entry of IntegratorNames (internal/RigidBodyKernels.h) */
+    explicit RigidBodyIntegrator(const RigidBodyIntegratorName& names);
+    /** The class name messages use, from IntegratorNames. */
+    const char* getIntegratorName() const;
     /** The step kernel of the bound Context, for a subclass's own queries (throws if not bound). */
-    OpenMM::Kernel& getBoundKernel();
+    RigidBodyStepKernel& getStepKernel() const;
     /**
      * A setting's check: throw an OpenMMException "<integrator>: the <what> must be a finite
      * number >= 0 <unit>, got <value>" (> 0 if zero is not allowed) unless it is one.
@@ -183,6 +186,9 @@ private:
     void useNewPositions();
     /** stateChanged(Positions or Velocities): make the Context's velocities rigid now, later, or keep them. */
     void useNewVelocities(bool byPositions);
+    /** The step kernel's state: everything but the step. */
+    RigidBodyState& state() const;
+    const RigidBodyIntegratorName* names;
     mutable OpenMM::Kernel kernel;
     std::vector<std::vector<int> > declaredBodies;
     RigidBodyTopology topology;

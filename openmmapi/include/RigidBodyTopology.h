@@ -9,12 +9,19 @@
 
 namespace MRattlePlugin {
 
+#ifndef SWIG
+namespace RigidBodyMath {
+enum class Shape;   // mrattle/RigidBodyMath.h: general, linear, a point
+}
+#endif
+
 /**
  * The one home of rigid-body topology, shared by every rigid-body integrator and kernel:
  * which particles form each body, which particles are free, which constraints must still
  * be enforced, the masses and the degrees of freedom. It is fixed once an integrator is
- * bound to a Context; the integrator hands a copy to its kernel. What depends on the
- * configuration (whether a body is linear) lives in the kernel.
+ * bound to a Context; the integrator hands a copy to its kernel. The shapes the bodies
+ * have at given positions are classified here, by one rule for every platform; the
+ * platform's state keeps them.
  *
  * Body semantics: with no explicit bodies, every molecule (OpenMM's connected components
  * of bonds and constraints) with two or more massive, non-virtual particles is a body.
@@ -75,6 +82,12 @@ public:
     double getTranslationalDegreesOfFreedom() const;
     int getRotationalDegreesOfFreedom(int bodyDegreesOfFreedom) const;
     double getFreeDegreesOfFreedom() const;
+#ifndef SWIG
+    /** Each body's shape (general, linear, a point) at these positions. */
+    std::vector<RigidBodyMath::Shape> classifyShapes(const std::vector<OpenMM::Vec3>& positions) const;
+    /** The bodies' degrees of freedom for these shapes: 6 each, 5 if linear, 3 if a point. */
+    static int getBodyDegreesOfFreedom(const std::vector<RigidBodyMath::Shape>& shapes);
+#endif
     /**
      * A hash of the partition of particles into bodies, the same whatever order the bodies
      * or their members were listed in: checkpoints carry it so that one written with other

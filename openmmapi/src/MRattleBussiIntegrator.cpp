@@ -9,10 +9,11 @@ using namespace MRattlePlugin;
 using namespace OpenMM;
 
 namespace {
-const char* const ClassName = "MRattleBussiIntegrator";
+const char* const ClassName = IntegratorNames::MRattleBussi.integrator;
 }
 
-MRattleBussiIntegrator::MRattleBussiIntegrator(double temperature, double collisionFrequency, double stepSize) {
+MRattleBussiIntegrator::MRattleBussiIntegrator(double temperature, double collisionFrequency, double stepSize)
+    : RigidBodyIntegrator(IntegratorNames::MRattleBussi) {
     setTemperature(temperature);
     setCollisionFrequency(collisionFrequency);
     setStepSize(stepSize);
@@ -40,18 +41,5 @@ void MRattleBussiIntegrator::setTimeConstant(double tau) {
 }
 
 double MRattleBussiIntegrator::computeHeatBathEnergy() {
-    Kernel& kernel = getBoundKernel();
-    return kernel.getAs<IntegrateMRattleBussiStepKernel>().computeHeatBathEnergy(*context);
-}
-
-std::string MRattleBussiIntegrator::getStepKernelName() const {
-    return IntegrateMRattleBussiStepKernel::Name();
-}
-
-void MRattleBussiIntegrator::executeStep(Kernel& kernel, ContextImpl& context, bool& forcesAreValid) {
-    kernel.getAs<IntegrateMRattleBussiStepKernel>().execute(context, *this, forcesAreValid);
-}
-
-// The key function of this integrator's kernel interface (its vtable lives in this library).
-IntegrateMRattleBussiStepKernel::~IntegrateMRattleBussiStepKernel() {
+    return getStepKernel().computeHeatBathEnergy(*context, *this);
 }

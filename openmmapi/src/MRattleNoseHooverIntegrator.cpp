@@ -8,13 +8,14 @@ using namespace MRattlePlugin;
 using namespace OpenMM;
 
 namespace {
-const char* const ClassName = "MRattleNoseHooverIntegrator";
+const char* const ClassName = IntegratorNames::MRattleNoseHoover.integrator;
 }
 
 MRattleNoseHooverIntegrator::MRattleNoseHooverIntegrator(double temperature, double collisionFrequency,
                                                          double stepSize, int chainLength, int numMTS,
                                                          int numYoshidaSuzuki)
-    : chainLength(chainLength), numMTS(numMTS), numYoshidaSuzuki(numYoshidaSuzuki) {
+    : RigidBodyIntegrator(IntegratorNames::MRattleNoseHoover), chainLength(chainLength), numMTS(numMTS),
+      numYoshidaSuzuki(numYoshidaSuzuki) {
     setTemperature(temperature);
     setCollisionFrequency(collisionFrequency);
     setStepSize(stepSize);
@@ -40,18 +41,5 @@ void MRattleNoseHooverIntegrator::setCollisionFrequency(double frequency) {
 }
 
 double MRattleNoseHooverIntegrator::computeHeatBathEnergy() {
-    Kernel& kernel = getBoundKernel();
-    return kernel.getAs<IntegrateMRattleNoseHooverStepKernel>().computeHeatBathEnergy(*context, *this);
-}
-
-std::string MRattleNoseHooverIntegrator::getStepKernelName() const {
-    return IntegrateMRattleNoseHooverStepKernel::Name();
-}
-
-void MRattleNoseHooverIntegrator::executeStep(Kernel& kernel, ContextImpl& context, bool& forcesAreValid) {
-    kernel.getAs<IntegrateMRattleNoseHooverStepKernel>().execute(context, *this, forcesAreValid);
-}
-
-// The key function of this integrator's kernel interface (its vtable lives in this library).
-IntegrateMRattleNoseHooverStepKernel::~IntegrateMRattleNoseHooverStepKernel() {
+    return getStepKernel().computeHeatBathEnergy(*context, *this);
 }

@@ -21,8 +21,21 @@ double temperatureOf(double kineticEnergy, double dof) {
 
 } // namespace
 
-RigidBodyIntegrator::RigidBodyIntegrator() {
+RigidBodyIntegrator::RigidBodyIntegrator(const RigidBodyIntegratorName& names) : names(&names) {
     setConstraintTolerance(1e-5);
+}
+
+const char* RigidBodyIntegrator::getIntegratorName() const {
+    return names->integrator;
+}
+
+RigidBodyStepKernel& RigidBodyIntegrator::getStepKernel() const {
+    requireContext();
+    return kernel.getAs<RigidBodyStepKernel>();
+}
+
+RigidBodyState& RigidBodyIntegrator::state() const {
+    return kernel.getAs<RigidBodyStepKernel>().getState();
 }
 
 void RigidBodyIntegrator::setStepSize(double size) {
@@ -80,7 +93,7 @@ bool RigidBodyIntegrator::isBodyLinear(int index) const {
     if (index < 0 || index >= getTopology().getNumBodies())
         throw OpenMMException("isBodyLinear: body index " + std::to_string(index) + " is out of range (" +
                               std::to_string(topology.getNumBodies()) + " bodies in effect)");
-    return kernel.getAs<const RigidBodyKernel>().isBodyLinear(index);
+    return state().isBodyLinear(index);
 }
 
 const vector<int>& RigidBodyIntegrator::getFreeParticles() const {
@@ -99,7 +112,7 @@ vector<int> RigidBodyIntegrator::getLargeDefaultBodies() const {
 }
 
 int RigidBodyIntegrator::getNumDegreesOfFreedom() const {
-    return getTopology().getNumDegreesOfFreedom(kernel.getAs<const RigidBodyKernel>().getBodyDegreesOfFreedom());
+    return getTopology().getNumDegreesOfFreedom(state().getBodyDegreesOfFreedom());
 }
 
 double RigidBodyIntegrator::computeSystemTemperature() {
@@ -110,7 +123,7 @@ double RigidBodyIntegrator::computeSystemTemperature() {
 double RigidBodyIntegrator::kineticEnergyPart(int part) {
     requireContext();
     double energies[3];
-    kernel.getAs<RigidBodyKernel>().computeKineticEnergies(*context, energies[0], energies[1], energies[2]);
+    state().computeKineticEnergies(*context, energies[0], energies[1], energies[2]);
     return energies[part];
 }
 
@@ -131,7 +144,7 @@ double RigidBodyIntegrator::getTranslationalDegreesOfFreedom() const {
 }
 
 int RigidBodyIntegrator::getRotationalDegreesOfFreedom() const {
-    return getTopology().getRotationalDegreesOfFreedom(kernel.getAs<const RigidBodyKernel>().getBodyDegreesOfFreedom());
+    return getTopology().getRotationalDegreesOfFreedom(state().getBodyDegreesOfFreedom());
 }
 
 double RigidBodyIntegrator::getFreeDegreesOfFreedom() const {
@@ -151,11 +164,6 @@ double RigidBodyIntegrator::computeFreeTemperature() {
     return temperatureOf(computeFreeKineticEnergy(), getFreeDegreesOfFreedom());
 }
 
-Kernel& RigidBodyIntegrator::getBoundKernel() {
-    requireContext();
-    return kernel;
-}
-
 void RigidBodyIntegrator::requireNonNegativeSetting(const char* integrator, const char* what, const char* unit,
                                                     double value, bool zeroAllowed) {
     if (!std::isfinite(value) || value < 0 || (value == 0 && !zeroAllowed))
@@ -171,8 +179,8 @@ void RigidBodyIntegrator::initialize(ContextImpl& contextRef) {
     topology = RigidBodyTopology(system, declaredBodies, contextRef.getMolecules());
     context = &contextRef;
     owner = &contextRef.getOwner();
-    kernel = contextRef.getPlatform().createKernel(getStepKernelName(), contextRef);
-    kernel.getAs<RigidBodyKernel>().initialize(system, topology, *this);
+    kernel = contextRef.getPlatform().createKernel(names->stepKernel, contextRef);
+    kernel.getAs<RigidBodyStepKernel>().initialize(system, topology, *this);
     stepState.reset();
 }
 
@@ -181,7 +189,7 @@ void RigidBodyIntegrator::cleanup() {
 }
 
 vector<std::string> RigidBodyIntegrator::getKernelNames() {
-    return {getStepKernelName()};
+    return {names->stepKernel};
 }
 
 bool RigidBodyIntegrator::isCurrentIntegrator() const {
@@ -207,7 +215,7 @@ void RigidBodyIntegrator::stateChanged(State::DataType changed) {
 
 void RigidBodyIntegrator::useNewPositions() {
     try {
-        kernel.getAs<RigidBodyKernel>().updateShapes(*context);
+        state().updateShapes(*context);
     } catch (const OpenMMException& e) {
         stepState.positionsRefused();
         throw OpenMMException(std::string("setPositions: ") + e.what() + "; the integrator will not step until "
@@ -222,7 +230,7 @@ void RigidBodyIntegrator::useNewVelocities(bool byPositions) {
     if (stepState.velocitiesChanged(byPositions, isCurrentIntegrator()) != RigidBodyStepState::VelocityUse::ProjectNow)
         return;
     try {
-        kernel.getAs<RigidBodyKernel>().projectVelocities(*context, getConstraintTolerance());
+        state().projectVelocities(*context, getConstraintTolerance());
     } catch (const OpenMMException& e) {
         // The kernel left the velocities as they were. Name the call that raised it.
         stepState.velocitiesRefused();
@@ -238,29 +246,29 @@ void RigidBodyIntegrator::useNewVelocities(bool byPositions) {
 void RigidBodyIntegrator::createCheckpoint(std::ostream& stream) const {
     requireContext();
     std::ostringstream kernelState;
-    kernel.getAs<const RigidBodyKernel>().createCheckpoint(*context, kernelState);
-    RigidBodyCheckpointHeader::write(stream, getStepKernelName(), topology, kernelState.str());
+    state().createCheckpoint(*context, kernelState);
+    RigidBodyCheckpointHeader::write(stream, names->stepKernel, topology, kernelState.str());
 }
 
 void RigidBodyIntegrator::loadCheckpoint(std::istream& stream) {
     requireContext();
     try {
-        std::istringstream kernelState(RigidBodyCheckpointHeader::read(stream, getStepKernelName(), topology));
-        kernel.getAs<RigidBodyKernel>().loadCheckpoint(*context, kernelState);
+        std::istringstream kernelState(RigidBodyCheckpointHeader::read(stream, names->stepKernel, topology));
+        state().loadCheckpoint(*context, kernelState);
     } catch (const OpenMMException& e) {
         // OpenMM has already read its own part unchecked: positions, velocities, time, box,
         // parameters and its platform's random state (garbage there crashes a later step).
         // Only Context::reinitialize() rebuilds all of it, so stepping waits for it (or for
         // a checkpoint that fits); meanwhile the platform's unchecked state is made valid.
         stepState.checkpointRefused();
-        kernel.getAs<RigidBodyKernel>().discardRefusedCheckpoint(*context);
+        state().discardRefusedCheckpoint(*context);
         throw OpenMMException(RigidBodyStepState::refusedCheckpointMessage(e.what()));
     }
     stepState.checkpointLoaded();
 }
 
 double RigidBodyIntegrator::computeKineticEnergy() {
-    return kernel.getAs<RigidBodyKernel>().computeKineticEnergy(*context);
+    return state().computeKineticEnergy(*context);
 }
 
 vector<Vec3> RigidBodyIntegrator::getVelocitiesForTemperature(const System& system, double temperature,
@@ -271,7 +279,7 @@ vector<Vec3> RigidBodyIntegrator::getVelocitiesForTemperature(const System& syst
                               std::to_string(temperature));
     if (!stepState.havePositions())
         throw OpenMMException("setVelocitiesToTemperature: set the positions first: rigid-body velocities depend on them");
-    return kernel.getAs<RigidBodyKernel>().getVelocitiesForTemperature(*context, temperature, randomSeed,
+    return state().getVelocitiesForTemperature(*context, temperature, randomSeed,
                                                                        getConstraintTolerance());
 }
 
@@ -280,11 +288,11 @@ void RigidBodyIntegrator::step(int steps) {
     stepState.requireSteppable(getStepSize());
     try {
         stepLoop(steps);
-        kernel.getAs<RigidBodyKernel>().finishSteps(*context);
+        state().finishSteps(*context);
     } catch (...) {
         // A failed step found late is the cause of anything else that went wrong after it.
         stepState.invalidateForces();
-        kernel.getAs<RigidBodyKernel>().finishSteps(*context);
+        state().finishSteps(*context);
         throw;
     }
 }
@@ -295,13 +303,13 @@ void RigidBodyIntegrator::stepLoop(int steps) {
         // velocities were set while it was not current: this integrator's bodies decide
         // now, before a thermostat's collisions (which the kernel must see as such).
         if (stepState.mustProjectBeforeStep(context->getStepCount())) {
-            kernel.getAs<RigidBodyKernel>().projectVelocities(*context, getConstraintTolerance());
+            state().projectVelocities(*context, getConstraintTolerance());
             stepState.projectedBeforeStep();
         }
         // A getState() may have overwritten the forces with other force groups.
         if (context->updateContextState() || context->getLastForceGroups() != getIntegrationForceGroups())
             stepState.invalidateForces();
-        executeStep(kernel, *context, stepState.forcesAreValid());
+        kernel.getAs<RigidBodyStepKernel>().execute(*context, *this, stepState.forcesAreValid());
         stepState.stepTaken(context->getStepCount());
     }
 }

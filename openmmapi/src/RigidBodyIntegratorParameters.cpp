@@ -1,4 +1,4 @@
-// RigidBodyIntegrator's integrator parameters: the kernel's time-varying state in a State.
+// RigidBodyIntegrator's integrator parameters: the state's time-varying variables in a State.
 #include "RigidBodyIntegrator.h"
 #include "internal/RigidBodyKernels.h"
 #include "openmm/OpenMMException.h"
@@ -22,10 +22,9 @@ std::string namesOf(const IntegratorParameterValues& values) {
 
 void RigidBodyIntegrator::serializeParameters(SerializationNode& node) const {
     requireContext();
-    RigidBodyKernel& bound = kernel.getAs<RigidBodyKernel>();
     node.setIntProperty("version", ParametersVersion);
-    node.setStringProperty("integrator", bound.integratorName());
-    for (const auto& entry : bound.getIntegratorParameters(*context)) {
+    node.setStringProperty("integrator", getIntegratorName());
+    for (const auto& entry : state().getIntegratorParameters(*context)) {
         SerializationNode& list = node.createChildNode(entry.first);
         for (double value : entry.second)
             list.createChildNode("Value").setDoubleProperty("v", value);
@@ -34,8 +33,8 @@ void RigidBodyIntegrator::serializeParameters(SerializationNode& node) const {
 
 void RigidBodyIntegrator::deserializeParameters(const SerializationNode& node) {
     requireContext();
-    RigidBodyKernel& bound = kernel.getAs<RigidBodyKernel>();
-    const std::string self = bound.integratorName(), prefix = self + ": the State's integrator parameters ";
+    RigidBodyState& bound = state();
+    const std::string self = getIntegratorName(), prefix = self + ": the State's integrator parameters ";
     IntegratorParameterValues values = bound.getIntegratorParameters(*context);  // the names and sizes expected
     if (node.getProperties().empty() && node.getChildren().empty()) {
         // Written by an integrator that has none (OpenMM's own, or one of this plugin's).

@@ -1,7 +1,23 @@
 #include "internal/RigidBodyKernels.h"
+#include "openmm/OpenMMException.h"
 
-// Key functions: the kernel interfaces' vtables and type information live in this
-// library only, so Kernel::getAs<> casts agree across the plugin's shared libraries. Each
-// integrator's own interface has its key function in that integrator's .cpp.
-MRattlePlugin::RigidBodyKernel::~RigidBodyKernel() {
+using namespace MRattlePlugin;
+
+// Key functions: the interfaces' vtables and type information live in this library only,
+// so Kernel::getAs<> casts agree across the plugin's shared libraries.
+RigidBodyState::~RigidBodyState() {
+}
+
+RigidBodyStepKernel::RigidBodyStepKernel(const std::string& name, const OpenMM::Platform& platform)
+    : OpenMM::KernelImpl(name, platform) {
+}
+
+RigidBodyStepKernel::~RigidBodyStepKernel() {
+}
+
+int IntegratorNames::indexOfStepKernel(const std::string& stepKernelName) {
+    for (int i = 0; i < (int) (sizeof(All) / sizeof(All[0])); i++)
+        if (stepKernelName == All[i].stepKernel)
+            return i;
+    throw OpenMM::OpenMMException("The M-RATTLE plugin has no kernel named '" + stepKernelName + "'");
 }

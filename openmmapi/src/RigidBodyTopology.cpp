@@ -1,4 +1,5 @@
 #include "RigidBodyTopology.h"
+#include "mrattle/RigidBodyMath.h"
 #include "openmm/CMMotionRemover.h"
 #include "openmm/MonteCarloAnisotropicBarostat.h"
 #include "openmm/MonteCarloBarostat.h"
@@ -229,5 +230,23 @@ int RigidBodyTopology::getNumDegreesOfFreedom(int bodyDegreesOfFreedom) const {
     int dof = 3 * (int) freeParticles.size() - (int) freeConstraints.size() + bodyDegreesOfFreedom;
     if (hasCMMotionRemover)
         dof -= 3;
+    return dof;
+}
+
+vector<RigidBodyMath::Shape> RigidBodyTopology::classifyShapes(const vector<Vec3>& positions) const {
+    const double* x = reinterpret_cast<const double*>(positions.data());
+    vector<RigidBodyMath::Shape> shapes(getNumBodies());
+    for (int b = 0; b < getNumBodies(); b++) {
+        const RigidBodyMath::BodyView body{bodies[b].data(), (int) bodies[b].size(), masses.data(), bodyMass[b], false};
+        const Eigen::Vector3d center = RigidBodyMath::centerOfMass(body, x);
+        shapes[b] = RigidBodyMath::classifyShape(RigidBodyMath::secondMoment(body, x, center), body.totalMass);
+    }
+    return shapes;
+}
+
+int RigidBodyTopology::getBodyDegreesOfFreedom(const vector<RigidBodyMath::Shape>& shapes) {
+    int dof = 0;
+    for (RigidBodyMath::Shape shape : shapes)
+        dof += RigidBodyMath::degreesOfFreedom(shape);
     return dof;
 }

@@ -1,7 +1,7 @@
 #ifndef MRATTLE_RIGID_BODY_THERMOSTATS_H_
 #define MRATTLE_RIGID_BODY_THERMOSTATS_H_
 
-#include "internal/RigidBodyKernels.h"
+#include "internal/RigidBodyState.h"
 #include "internal/windowsExportMRattle.h"
 #include <iosfwd>
 #include <random>

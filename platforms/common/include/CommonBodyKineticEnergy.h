@@ -10,7 +10,7 @@ namespace MRattlePlugin {
 /**
  * The kinetic energy of the Context's velocities split into the rigid bodies' translation,
  * their rotation and the free particles, on OpenMM's common compute platforms
- * (RigidBodyKernel::computeKineticEnergies()). The bodies' parts come from the device
+ * (RigidBodyState::computeKineticEnergies()). The bodies' parts come from the device
  * (kernels/bodyKineticEnergy.cc, one work item per body); the free part is OpenMM's kinetic
  * energy of all particles minus the bodies' atoms', so the three add up to it. The program is
  * compiled at the first call: Contexts that never ask pay nothing.

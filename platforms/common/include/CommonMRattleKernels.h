@@ -8,7 +8,7 @@
 namespace MRattlePlugin {
 
 /** MRattleIntegrator on the common compute platforms: velocity Verlet with M-RATTLE's resets. */
-class CommonIntegrateMRattleStepKernel : public CommonRigidBodyStepKernel<IntegrateMRattleStepKernel> {
+class CommonIntegrateMRattleStepKernel : public CommonRigidBodyStepKernel<MRattleIntegrator> {
 public:
     CommonIntegrateMRattleStepKernel(const std::string& name, const OpenMM::Platform& platform, OpenMM::ComputeContext& cc)
         : CommonRigidBodyStepKernel(name, platform, cc) {

@@ -13,7 +13,7 @@ namespace MRattlePlugin {
  * the noise (OpenMM's device random numbers, which its checkpoints hold): two fused passes
  * per step (CommonRigidBodyDynamics::advance).
  */
-class CommonIntegrateMRattleLangevinStepKernel : public CommonRigidBodyStepKernel<IntegrateMRattleLangevinStepKernel> {
+class CommonIntegrateMRattleLangevinStepKernel : public CommonRigidBodyStepKernel<MRattleLangevinIntegrator> {
 public:
     CommonIntegrateMRattleLangevinStepKernel(const std::string& name, const OpenMM::Platform& platform,
                                              OpenMM::ComputeContext& cc)

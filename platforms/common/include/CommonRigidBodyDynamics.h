@@ -1,7 +1,7 @@
 #ifndef MRATTLE_COMMON_RIGID_BODY_DYNAMICS_H_
 #define MRATTLE_COMMON_RIGID_BODY_DYNAMICS_H_
 
-#include "BodyShapeConstraints.h"
+#include "internal/BodyShapeConstraints.h"
 #include "CommonBodyKineticEnergy.h"
 #include "CommonStepFailure.h"
 #include "RigidBodyTopology.h"
@@ -143,7 +143,7 @@ public:
     /** The end of a step(n) call: the blocking check of the steps not yet checked. */
     void finishSteps();
 
-    /** RigidBodyKernel's work, the same for every integrator. */
+    /** RigidBodyState's work, the same for every integrator. */
     void updateShapes(OpenMM::ContextImpl& context);
     void projectVelocities(OpenMM::ContextImpl& context, double tolerance);
     std::vector<OpenMM::Vec3> velocitiesForTemperature(OpenMM::ContextImpl& context, double temperature, int randomSeed,

@@ -3,6 +3,7 @@
 
 #include "CommonRigidBodyDynamics.h"
 #include "RigidBodyIntegrator.h"
+#include "internal/RigidBodyKernels.h"
 #include "openmm/common/ContextSelector.h"
 #include <string>
 #include <vector>
@@ -11,20 +12,25 @@ namespace MRattlePlugin {
 
 /**
  * Everything of a rigid-body step kernel on the common compute platforms but the step
- * itself, which a kernel supplies with its interface's execute() (e.g.
- * IntegrateMRattleStepKernel): the shared work is CommonRigidBodyDynamics'.
+ * itself, which a kernel supplies with execute() for its integrator class: the shared work
+ * is CommonRigidBodyDynamics'.
  */
-template <class StepKernel>
-class CommonRigidBodyStepKernel : public StepKernel {
+template <class IntegratorClass>
+class CommonRigidBodyStepKernel : public RigidBodyStepKernel, public RigidBodyState {
 public:
-    typedef typename StepKernel::IntegratorType Integrator;
-    /** Failures are reported as the interface's IntegratorName(). */
+    typedef IntegratorClass Integrator;
+    /** Failures are reported as the integrator's name (IntegratorNames). */
     CommonRigidBodyStepKernel(const std::string& name, const OpenMM::Platform& platform, OpenMM::ComputeContext& cc)
-        : StepKernel(name, platform), dynamics(cc, StepKernel::IntegratorName()) {
+        : RigidBodyStepKernel(name, platform), dynamics(cc, IntegratorNames::ofStepKernel(name).integrator) {
     }
-    std::string integratorName() const override {
-        return StepKernel::IntegratorName();
+    RigidBodyState& getState() override {
+        return *this;
     }
+    void execute(OpenMM::ContextImpl& context, const RigidBodyIntegrator& integrator, bool& forcesAreValid) override {
+        execute(context, static_cast<const Integrator&>(integrator), forcesAreValid);
+    }
+    /** One step of this integrator class. */
+    virtual void execute(OpenMM::ContextImpl& context, const Integrator& integrator, bool& forcesAreValid) = 0;
     void initialize(const OpenMM::System& system, const RigidBodyTopology& topology,
                     const RigidBodyIntegrator& integrator) override {
         OpenMM::ContextSelector selector(dynamics.computeContext());
@@ -69,6 +75,13 @@ public:
     void loadCheckpoint(OpenMM::ContextImpl& context, std::istream& stream) override {
         OpenMM::ContextSelector selector(dynamics.computeContext());
         dynamics.loadCheckpoint(stream);
+    }
+    void discardRefusedCheckpoint(OpenMM::ContextImpl& context) override {
+    }
+    IntegratorParameterValues getIntegratorParameters(OpenMM::ContextImpl& context) override {
+        return {};
+    }
+    void setIntegratorParameters(OpenMM::ContextImpl& context, const IntegratorParameterValues& values) override {
     }
 
 protected:

@@ -77,14 +77,14 @@ private:
 
 /** MRattleNoseHooverIntegrator on the common compute platforms: the chain lives on the device. */
 class CommonIntegrateMRattleNoseHooverStepKernel
-    : public CommonVelocityScalingStepKernel<IntegrateMRattleNoseHooverStepKernel> {
+    : public CommonVelocityScalingStepKernel<MRattleNoseHooverIntegrator> {
 public:
     CommonIntegrateMRattleNoseHooverStepKernel(const std::string& name, const OpenMM::Platform& platform,
                                                OpenMM::ComputeContext& cc)
         : CommonVelocityScalingStepKernel(name, platform, cc) {
     }
     /** Reads the chain from the device (not a per-step cost: only when asked). */
-    double computeHeatBathEnergy(OpenMM::ContextImpl& context, const MRattleNoseHooverIntegrator& integrator) override;
+    double computeHeatBathEnergy(OpenMM::ContextImpl& context, const RigidBodyIntegrator& integrator) override;
     void createCheckpoint(OpenMM::ContextImpl& context, std::ostream& stream) const override;
     void loadCheckpoint(OpenMM::ContextImpl& context, std::istream& stream) override;
     IntegratorParameterValues getIntegratorParameters(OpenMM::ContextImpl& context) override;
@@ -105,14 +105,14 @@ private:
 };
 
 /** MRattleBussiIntegrator on the common compute platforms: OpenMM's device Gaussian numbers, the work on the device. */
-class CommonIntegrateMRattleBussiStepKernel : public CommonVelocityScalingStepKernel<IntegrateMRattleBussiStepKernel> {
+class CommonIntegrateMRattleBussiStepKernel : public CommonVelocityScalingStepKernel<MRattleBussiIntegrator> {
 public:
     CommonIntegrateMRattleBussiStepKernel(const std::string& name, const OpenMM::Platform& platform,
                                           OpenMM::ComputeContext& cc)
         : CommonVelocityScalingStepKernel(name, platform, cc) {
     }
     /** Reads the work from the device (only when asked). */
-    double computeHeatBathEnergy(OpenMM::ContextImpl& context) override;
+    double computeHeatBathEnergy(OpenMM::ContextImpl& context, const RigidBodyIntegrator& integrator) override;
     void createCheckpoint(OpenMM::ContextImpl& context, std::ostream& stream) const override;
     void loadCheckpoint(OpenMM::ContextImpl& context, std::istream& stream) override;
     /** The work only: the random stream stays the Context's (replicas must not share one). */

@@ -21,11 +21,8 @@ std::string hostPlatformNames() {
     return names;
 }
 
-/** A kernel of the device platforms: its name (the interface's Name()) and how to make it. */
-struct CommonKernel {
-    std::string (*name)();
-    KernelImpl* (*create)(const std::string& name, const Platform& platform, ComputeContext& cc);
-};
+/** How to make a kernel of the device platforms. */
+typedef KernelImpl* (*CommonKernelMaker)(const std::string& name, const Platform& platform, ComputeContext& cc);
 
 template <class Kernel>
 KernelImpl* make(const std::string& name, const Platform& platform, ComputeContext& cc) {
@@ -34,31 +31,30 @@ KernelImpl* make(const std::string& name, const Platform& platform, ComputeConte
 
 /** The splitting baseline has no device kernel: refused naming the platforms that run it. */
 KernelImpl* refuseRigidSplitting(const std::string& name, const Platform& platform, ComputeContext& cc) {
-    throw OpenMMException(IntegrateRigidSplittingStepKernel::IntegratorName() + " (the paper's baseline) runs on the " +
-                          hostPlatformNames() + " platforms only, not on " + platform.getName() +
-                          "; the plugin's other integrators run there. Create its Context on one of those "
+    throw OpenMMException(std::string(IntegratorNames::RigidSplitting.integrator) +
+                          " (the paper's baseline) runs on the " + hostPlatformNames() + " platforms only, not on " +
+                          platform.getName() + "; the plugin's other integrators run there. Create its Context on one of those "
                           "(Platform::getPlatformByName).");
 }
 
-/** The kernels of the device platforms (OpenCL, CUDA): registered and created from this list alone. */
-const CommonKernel Kernels[] = {
-    {IntegrateMRattleStepKernel::Name, make<CommonIntegrateMRattleStepKernel>},
-    {IntegrateMRattleLangevinStepKernel::Name, make<CommonIntegrateMRattleLangevinStepKernel>},
-    {IntegrateMRattleNoseHooverStepKernel::Name, make<CommonIntegrateMRattleNoseHooverStepKernel>},
-    {IntegrateMRattleBussiStepKernel::Name, make<CommonIntegrateMRattleBussiStepKernel>},
-    {IntegrateRigidSplittingStepKernel::Name, refuseRigidSplitting},
+/** The makers of the device platforms' kernels (OpenCL, CUDA), in the order of IntegratorNames::All. */
+const CommonKernelMaker Makers[] = {
+    make<CommonIntegrateMRattleStepKernel>,
+    make<CommonIntegrateMRattleLangevinStepKernel>,
+    make<CommonIntegrateMRattleNoseHooverStepKernel>,
+    make<CommonIntegrateMRattleBussiStepKernel>,
+    refuseRigidSplitting,
 };
+static_assert(sizeof(Makers) / sizeof(Makers[0]) == sizeof(IntegratorNames::All) / sizeof(IntegratorNames::All[0]),
+              "one maker per integrator of IntegratorNames::All");
 
 } // namespace
 
 KernelImpl* MRattlePlugin::createCommonKernel(const std::string& name, const Platform& platform, ComputeContext& cc) {
-    for (const CommonKernel& kernel : Kernels)
-        if (name == kernel.name())
-            return kernel.create(name, platform, cc);
-    throw OpenMMException("The M-RATTLE plugin has no kernel named '" + name + "' on " + platform.getName());
+    return Makers[IntegratorNames::indexOfStepKernel(name)](name, platform, cc);
 }
 
 void MRattlePlugin::registerCommonKernels(Platform& platform, KernelFactory* factory) {
-    for (const CommonKernel& kernel : Kernels)
-        platform.registerKernelFactory(kernel.name(), factory);
+    for (const RigidBodyIntegratorName& names : IntegratorNames::All)
+        platform.registerKernelFactory(names.stepKernel, factory);
 }

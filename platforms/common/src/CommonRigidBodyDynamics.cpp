@@ -1,9 +1,8 @@
 #include "CommonRigidBodyDynamics.h"
 #include "CommonBodyForceInfo.h"
 #include "CommonMRattleKernelSources.h"
-#include "BodyShapes.h"
-#include "FiniteValues.h"
-#include "ThermalVelocities.h"
+#include "internal/FiniteValues.h"
+#include "internal/ThermalVelocities.h"
 #include "RigidBodyIntegrator.h"
 #include "openmm/AndersenThermostat.h"
 #include "openmm/OpenMMException.h"
@@ -341,6 +340,6 @@ void CommonRigidBodyDynamics::kineticEnergies(double& translational, double& rot
 }
 
 int CommonRigidBodyDynamics::bodyDegreesOfFreedom() const {
-    return BodyShapes::degreesOfFreedom(shapes);
+    return RigidBodyTopology::getBodyDegreesOfFreedom(shapes);
 }
 

@@ -4,8 +4,7 @@
  * checkpoints.
  */
 #include "CommonRigidBodyDynamics.h"
-#include "BodyShapes.h"
-#include "FiniteValues.h"
+#include "internal/FiniteValues.h"
 #include "openmm/OpenMMException.h"
 #include "openmm/internal/ContextImpl.h"
 #include <algorithm>
@@ -68,7 +67,7 @@ void CommonRigidBodyDynamics::updateShapes(ContextImpl& context) {
         writingCorrectedShapes = false;
         context.getPositions(positions);
     }
-    shapes = BodyShapes::classify(bodies, positions);
+    shapes = bodies.classifyShapes(positions);
     if (keepReference)
         keepReference = false;  // a checkpoint's positions: its reference came with them
     else if (rebuildsShapes())

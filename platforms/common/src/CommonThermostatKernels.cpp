@@ -126,8 +126,8 @@ vector<double> CommonVelocityScalingStepKernel<StepKernel>::downloadMixed(const 
     return values;
 }
 
-template class MRattlePlugin::CommonVelocityScalingStepKernel<IntegrateMRattleNoseHooverStepKernel>;
-template class MRattlePlugin::CommonVelocityScalingStepKernel<IntegrateMRattleBussiStepKernel>;
+template class MRattlePlugin::CommonVelocityScalingStepKernel<MRattleNoseHooverIntegrator>;
+template class MRattlePlugin::CommonVelocityScalingStepKernel<MRattleBussiIntegrator>;
 
 // ---- Nose-Hoover chain ---------------------------------------------------------------------
 
@@ -188,7 +188,8 @@ RigidBodyThermostats::NoseHooverChain CommonIntegrateMRattleNoseHooverStepKernel
 }
 
 double CommonIntegrateMRattleNoseHooverStepKernel::computeHeatBathEnergy(ContextImpl& context,
-                                                                        const MRattleNoseHooverIntegrator& integrator) {
+                                                                        const RigidBodyIntegrator& bound) {
+    const MRattleNoseHooverIntegrator& integrator = static_cast<const MRattleNoseHooverIntegrator&>(bound);
     ContextSelector selector(dynamics.computeContext());
     return downloadChain().energy(degreesOfFreedom(), BOLTZ * integrator.getTemperature(),
                                   integrator.getCollisionFrequency());
@@ -269,7 +270,8 @@ void CommonIntegrateMRattleBussiStepKernel::halfStep(const MRattleBussiIntegrato
     rescaleKernel->execute(ThermostatThreads, ThermostatThreads);
 }
 
-double CommonIntegrateMRattleBussiStepKernel::computeHeatBathEnergy(ContextImpl& context) {
+double CommonIntegrateMRattleBussiStepKernel::computeHeatBathEnergy(ContextImpl& context,
+                                                                   const RigidBodyIntegrator& integrator) {
     ContextSelector selector(dynamics.computeContext());
     return -downloadMixed(work)[0];
 }

@@ -8,7 +8,7 @@
 namespace MRattlePlugin {
 
 /** MRattleIntegrator on the Reference platform, also registered on the CPU platform: velocity Verlet with M-RATTLE's resets. */
-class ReferenceIntegrateMRattleStepKernel : public ReferenceRigidBodyStepKernel<IntegrateMRattleStepKernel> {
+class ReferenceIntegrateMRattleStepKernel : public ReferenceRigidBodyStepKernel<MRattleIntegrator> {
 public:
     using ReferenceRigidBodyStepKernel::ReferenceRigidBodyStepKernel;
     void execute(OpenMM::ContextImpl& context, const MRattleIntegrator& integrator, bool& forcesAreValid) override;

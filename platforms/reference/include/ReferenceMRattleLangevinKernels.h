@@ -13,7 +13,7 @@ namespace MRattlePlugin {
  * after the kick and after the noise (the kernel's random stream, which checkpoints hold).
  * Leapfrog: the velocities it keeps are those of the middle of the step.
  */
-class ReferenceIntegrateMRattleLangevinStepKernel : public ReferenceRigidBodyStepKernel<IntegrateMRattleLangevinStepKernel> {
+class ReferenceIntegrateMRattleLangevinStepKernel : public ReferenceRigidBodyStepKernel<MRattleLangevinIntegrator> {
 public:
     using ReferenceRigidBodyStepKernel::ReferenceRigidBodyStepKernel;
     void execute(OpenMM::ContextImpl& context, const MRattleLangevinIntegrator& integrator, bool& forcesAreValid) override;

@@ -1,7 +1,7 @@
 #ifndef MRATTLE_REFERENCE_RIGID_BODY_DYNAMICS_H_
 #define MRATTLE_REFERENCE_RIGID_BODY_DYNAMICS_H_
 
-#include "BodyShapeConstraints.h"
+#include "internal/BodyShapeConstraints.h"
 #include "ReferenceRigidBodyOperations.h"
 #include "RigidBodyTopology.h"
 #include "openmm/System.h"
@@ -84,7 +84,7 @@ public:
     }
     void acceptNewState();
 
-    /** RigidBodyKernel's work, the same for every integrator. */
+    /** RigidBodyState's work, the same for every integrator. */
     void updateShapes(OpenMM::ContextImpl& context);
     void projectVelocities(OpenMM::ContextImpl& context, double tolerance);
     std::vector<OpenMM::Vec3> velocitiesForTemperature(OpenMM::ContextImpl& context, double temperature, int randomSeed,

@@ -94,12 +94,12 @@ public:
     void projectNonRigidVelocities(std::vector<OpenMM::Vec3>& positions, std::vector<OpenMM::Vec3>& velocities,
                                    double tolerance);
     double kineticEnergy(const std::vector<OpenMM::Vec3>& velocities) const;
-    /** kineticEnergy() split into the bodies' translation and rotation and the free particles (RigidBodyKernel). */
+    /** kineticEnergy() split into the bodies' translation and rotation and the free particles (RigidBodyState). */
     void kineticEnergies(const std::vector<OpenMM::Vec3>& velocities, double& translational, double& rotational,
                          double& free) const;
     /** A kick v += f (time / m) of every massive particle. */
     void kick(std::vector<OpenMM::Vec3>& velocities, const std::vector<OpenMM::Vec3>& forces, double time);
-    /** Rigid-body Maxwell-Boltzmann velocities at exactly this temperature (RigidBodyKernel). */
+    /** Rigid-body Maxwell-Boltzmann velocities at exactly this temperature (RigidBodyState). */
     std::vector<OpenMM::Vec3> velocitiesForTemperature(std::vector<OpenMM::Vec3>& positions, double temperature,
                                                        int randomSeed, double tolerance);
 

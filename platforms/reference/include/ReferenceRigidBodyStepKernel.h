@@ -3,25 +3,37 @@
 
 #include "ReferenceRigidBodyDynamics.h"
 #include "RigidBodyIntegrator.h"
+#include "internal/RigidBodyKernels.h"
 #include <vector>
 
 namespace MRattlePlugin {
 
 /**
  * Everything of a rigid-body step kernel on the Reference and CPU platforms but the step
- * itself, which a kernel supplies with its interface's execute() (e.g.
- * IntegrateMRattleStepKernel) as a list of the phases of ReferenceRigidBodyDynamics, the
- * shared work: the counterpart of CommonRigidBodyStepKernel.
+ * itself, which a kernel supplies with execute() for its integrator class as a list of the
+ * phases of ReferenceRigidBodyDynamics, the shared work.
  */
-template <class StepKernel>
-class ReferenceRigidBodyStepKernel : public StepKernel {
+template <class IntegratorClass>
+class ReferenceRigidBodyStepKernel : public RigidBodyStepKernel, public RigidBodyState {
 public:
-    typedef typename StepKernel::IntegratorType Integrator;
+    typedef IntegratorClass Integrator;
     ReferenceRigidBodyStepKernel(const std::string& name, const OpenMM::Platform& platform)
-        : StepKernel(name, platform), dynamics(StepKernel::IntegratorName()) {
+        : RigidBodyStepKernel(name, platform), dynamics(IntegratorNames::ofStepKernel(name).integrator) {
     }
-    std::string integratorName() const override {
-        return StepKernel::IntegratorName();
+    RigidBodyState& getState() override {
+        return *this;
+    }
+    void execute(OpenMM::ContextImpl& context, const RigidBodyIntegrator& integrator, bool& forcesAreValid) override {
+        execute(context, static_cast<const Integrator&>(integrator), forcesAreValid);
+    }
+    /** One step of this integrator class. */
+    virtual void execute(OpenMM::ContextImpl& context, const Integrator& integrator, bool& forcesAreValid) = 0;
+    void finishSteps(OpenMM::ContextImpl& context) override {
+    }
+    IntegratorParameterValues getIntegratorParameters(OpenMM::ContextImpl& context) override {
+        return {};
+    }
+    void setIntegratorParameters(OpenMM::ContextImpl& context, const IntegratorParameterValues& values) override {
     }
     void initialize(const OpenMM::System& system, const RigidBodyTopology& topology,
                     const RigidBodyIntegrator& integrator) override {

@@ -12,7 +12,7 @@ namespace MRattlePlugin {
  * registered on the CPU platform: velocity Verlet whose position update is a free-rotor
  * splitting per body.
  */
-class ReferenceIntegrateRigidSplittingStepKernel : public ReferenceRigidBodyStepKernel<IntegrateRigidSplittingStepKernel> {
+class ReferenceIntegrateRigidSplittingStepKernel : public ReferenceRigidBodyStepKernel<RigidSplittingIntegrator> {
 public:
     using ReferenceRigidBodyStepKernel::ReferenceRigidBodyStepKernel;
     void execute(OpenMM::ContextImpl& context, const RigidSplittingIntegrator& integrator, bool& forcesAreValid) override;

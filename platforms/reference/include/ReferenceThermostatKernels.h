@@ -43,10 +43,10 @@ private:
 
 /** MRattleNoseHooverIntegrator on the Reference platform, also registered on the CPU platform. */
 class ReferenceIntegrateMRattleNoseHooverStepKernel
-    : public ReferenceVelocityScalingStepKernel<IntegrateMRattleNoseHooverStepKernel> {
+    : public ReferenceVelocityScalingStepKernel<MRattleNoseHooverIntegrator> {
 public:
     using ReferenceVelocityScalingStepKernel::ReferenceVelocityScalingStepKernel;
-    double computeHeatBathEnergy(OpenMM::ContextImpl& context, const MRattleNoseHooverIntegrator& integrator) override;
+    double computeHeatBathEnergy(OpenMM::ContextImpl& context, const RigidBodyIntegrator& integrator) override;
     void createCheckpoint(OpenMM::ContextImpl& context, std::ostream& stream) const override;
     void loadCheckpoint(OpenMM::ContextImpl& context, std::istream& stream) override;
     IntegratorParameterValues getIntegratorParameters(OpenMM::ContextImpl& context) override {
@@ -72,10 +72,10 @@ private:
 };
 
 /** MRattleBussiIntegrator on the Reference platform, also registered on the CPU platform. */
-class ReferenceIntegrateMRattleBussiStepKernel : public ReferenceVelocityScalingStepKernel<IntegrateMRattleBussiStepKernel> {
+class ReferenceIntegrateMRattleBussiStepKernel : public ReferenceVelocityScalingStepKernel<MRattleBussiIntegrator> {
 public:
     using ReferenceVelocityScalingStepKernel::ReferenceVelocityScalingStepKernel;
-    double computeHeatBathEnergy(OpenMM::ContextImpl& context) override {
+    double computeHeatBathEnergy(OpenMM::ContextImpl& context, const RigidBodyIntegrator& integrator) override {
         return -work;
     }
     void createCheckpoint(OpenMM::ContextImpl& context, std::ostream& stream) const override;

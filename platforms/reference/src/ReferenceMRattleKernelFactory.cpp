@@ -14,25 +14,24 @@ using namespace OpenMM;
 
 namespace {
 
-/** A kernel of this platform: its name (the interface's Name()) and how to make it. */
-struct ReferenceKernel {
-    std::string (*name)();
-    KernelImpl* (*create)(const std::string& name, const Platform& platform);
-};
+/** How to make a kernel of this platform. */
+typedef KernelImpl* (*ReferenceKernelMaker)(const std::string& name, const Platform& platform);
 
 template <class Kernel>
 KernelImpl* make(const std::string& name, const Platform& platform) {
     return new Kernel(name, platform);
 }
 
-/** The kernels of the Reference and CPU platforms: registered and created from this list alone. */
-const ReferenceKernel Kernels[] = {
-    {IntegrateMRattleStepKernel::Name, make<ReferenceIntegrateMRattleStepKernel>},
-    {IntegrateRigidSplittingStepKernel::Name, make<ReferenceIntegrateRigidSplittingStepKernel>},
-    {IntegrateMRattleLangevinStepKernel::Name, make<ReferenceIntegrateMRattleLangevinStepKernel>},
-    {IntegrateMRattleNoseHooverStepKernel::Name, make<ReferenceIntegrateMRattleNoseHooverStepKernel>},
-    {IntegrateMRattleBussiStepKernel::Name, make<ReferenceIntegrateMRattleBussiStepKernel>},
+/** The makers of the Reference and CPU platforms' kernels, in the order of IntegratorNames::All. */
+const ReferenceKernelMaker Makers[] = {
+    make<ReferenceIntegrateMRattleStepKernel>,
+    make<ReferenceIntegrateMRattleLangevinStepKernel>,
+    make<ReferenceIntegrateMRattleNoseHooverStepKernel>,
+    make<ReferenceIntegrateMRattleBussiStepKernel>,
+    make<ReferenceIntegrateRigidSplittingStepKernel>,
 };
+static_assert(sizeof(Makers) / sizeof(Makers[0]) == sizeof(IntegratorNames::All) / sizeof(IntegratorNames::All[0]),
+              "one maker per integrator of IntegratorNames::All");
 
 /** A platform of the build's list that this plugin serves (Reference and CPU; the CPU platform derives from Reference). */
 bool isHostPlatform(const std::string& name) {
@@ -54,8 +53,8 @@ void registerOnReferenceAndCpu() {
         if (isHostPlatform(platform.getName())) {
             // One factory per platform: each Platform deletes the factories it holds.
             ReferenceMRattleKernelFactory* factory = new ReferenceMRattleKernelFactory();
-            for (const ReferenceKernel& kernel : Kernels)
-                platform.registerKernelFactory(kernel.name(), factory);
+            for (const RigidBodyIntegratorName& names : IntegratorNames::All)
+                platform.registerKernelFactory(names.stepKernel, factory);
         }
     }
 }
@@ -64,10 +63,7 @@ void registerOnReferenceAndCpu() {
 
 KernelImpl* ReferenceMRattleKernelFactory::createKernelImpl(std::string name, const Platform& platform,
                                                             ContextImpl& context) const {
-    for (const ReferenceKernel& kernel : Kernels)
-        if (name == kernel.name())
-            return kernel.create(name, platform);
-    throw OpenMMException("ReferenceMRattleKernelFactory: no kernel named '" + name + "'");
+    return Makers[IntegratorNames::indexOfStepKernel(name)](name, platform);
 }
 
 extern "C" OPENMM_EXPORT void registerPlatforms() {

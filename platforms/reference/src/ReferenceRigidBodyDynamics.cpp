@@ -1,5 +1,5 @@
 #include "ReferenceRigidBodyDynamics.h"
-#include "FiniteValues.h"
+#include "internal/FiniteValues.h"
 #include "RigidBodyIntegrator.h"
 #include "openmm/AndersenThermostat.h"
 #include "openmm/OpenMMException.h"
@@ -156,7 +156,7 @@ void ReferenceRigidBodyDynamics::requireFiniteStepResult() {
     }
 }
 
-// ---- RigidBodyKernel's work --------------------------------------------------------------
+// ---- RigidBodyState's work --------------------------------------------------------------
 
 void ReferenceRigidBodyDynamics::updateShapes(ContextImpl& context) {
     vector<Vec3>& x = positionsOf(context);

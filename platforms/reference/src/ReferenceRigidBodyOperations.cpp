@@ -1,6 +1,5 @@
 #include "ReferenceRigidBodyOperations.h"
-#include "BodyShapes.h"
-#include "ThermalVelocities.h"
+#include "internal/ThermalVelocities.h"
 #include "openmm/AndersenThermostat.h"
 #include "openmm/OpenMMException.h"
 #include "openmm/reference/SimTKOpenMMRealType.h"
@@ -164,14 +163,14 @@ void ReferenceRigidBodyOperations::forEachParticleRange(const std::function<void
 }
 
 void ReferenceRigidBodyOperations::updateShapes(const vector<Vec3>& positions) {
-    shapes = BodyShapes::classify(bodies, positions);
+    shapes = bodies.classifyShapes(positions);
     // A point rotates no more than a line does: both take the linear body's arithmetic.
     for (int b = 0; b < bodies.getNumBodies(); b++)
         views[b].linear = (shapes[b] != RigidBodyMath::Shape::General);
 }
 
 int ReferenceRigidBodyOperations::getBodyDegreesOfFreedom() const {
-    return BodyShapes::degreesOfFreedom(shapes);
+    return RigidBodyTopology::getBodyDegreesOfFreedom(shapes);
 }
 
 void ReferenceRigidBodyOperations::seedRandom(int seed) {

@@ -38,8 +38,8 @@ void ReferenceVelocityScalingStepKernel<StepKernel>::halfStep(const Integrator& 
 }
 
 // The two thermostats' instances (the kernels that derive from them are defined below).
-template class MRattlePlugin::ReferenceVelocityScalingStepKernel<IntegrateMRattleNoseHooverStepKernel>;
-template class MRattlePlugin::ReferenceVelocityScalingStepKernel<IntegrateMRattleBussiStepKernel>;
+template class MRattlePlugin::ReferenceVelocityScalingStepKernel<MRattleNoseHooverIntegrator>;
+template class MRattlePlugin::ReferenceVelocityScalingStepKernel<MRattleBussiIntegrator>;
 
 // ---- Nose-Hoover chain ---------------------------------------------------------------------
 
@@ -57,7 +57,8 @@ double ReferenceIntegrateMRattleNoseHooverStepKernel::halfStepScale(double kinet
 }
 
 double ReferenceIntegrateMRattleNoseHooverStepKernel::computeHeatBathEnergy(ContextImpl& context,
-                                                                           const MRattleNoseHooverIntegrator& integrator) {
+                                                                           const RigidBodyIntegrator& bound) {
+    const MRattleNoseHooverIntegrator& integrator = static_cast<const MRattleNoseHooverIntegrator&>(bound);
     return chain.energy(degreesOfFreedom(), BOLTZ * integrator.getTemperature(), integrator.getCollisionFrequency());
 }
 

@@ -5,6 +5,7 @@
 #include "openmm/System.h"
 #include "openmm/Vec3.h"
 #include "openmm/reference/ReferenceConstraints.h"
+#include "internal/windowsExportMRattle.h"
 #include <memory>
 #include <vector>
 
@@ -20,9 +21,8 @@ namespace MRattlePlugin {
  * shape it was given. Bodies that RigidBodyMath::classifyShape() finds linear but whose
  * atoms are off their axis (a bent CO2 from 3-decimal coordinates) are then placed on it,
  * keeping their centre of mass, so that every platform integrates the same straight body.
- * Used by every platform's kernels on the host.
  */
-class BodyShapeConstraints {
+class OPENMM_EXPORT_MRATTLE BodyShapeConstraints {
 public:
     BodyShapeConstraints(const OpenMM::System& system, const RigidBodyTopology& topology);
     /**

@@ -2,6 +2,7 @@
 #define MRATTLE_FINITE_VALUES_H_
 
 #include "openmm/Vec3.h"
+#include "internal/windowsExportMRattle.h"
 #include <string>
 #include <vector>
 
@@ -9,7 +10,7 @@ namespace MRattlePlugin {
 namespace FiniteValues {
 
 /** Throw an OpenMMException naming the first particle whose value (`what`: "position", ...) is not finite. */
-void require(const std::vector<OpenMM::Vec3>& values, const std::string& what);
+OPENMM_EXPORT_MRATTLE void require(const std::vector<OpenMM::Vec3>& values, const std::string& what);
 
 } // namespace FiniteValues
 } // namespace MRattlePlugin

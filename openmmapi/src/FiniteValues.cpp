@@ -1,4 +1,4 @@
-#include "FiniteValues.h"
+#include "internal/FiniteValues.h"
 #include "openmm/OpenMMException.h"
 #include <cmath>
 

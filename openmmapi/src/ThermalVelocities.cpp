@@ -1,4 +1,4 @@
-#include "ThermalVelocities.h"
+#include "internal/ThermalVelocities.h"
 #include "openmm/reference/SimTKOpenMMRealType.h"
 #include <cmath>
 #include <random>

@@ -1,4 +1,4 @@
-#include "BodyShapeConstraints.h"
+#include "internal/BodyShapeConstraints.h"
 #include "mrattle/RigidBodyMath.h"
 #include <algorithm>
 #include <cmath>
