@@ -556,7 +556,7 @@ TEST_P(DevicePlatform, ABodyOfTwoMoleculesAcrossTheBoxEdgeStaysWholeThroughReord
 
 TEST_P(DevicePlatform, AnInfiniteForceIsFoundByTheSpeedItGives) {
     // OpenMM sums device forces in fixed point: an infinite force arrives as about 2e9
-    // kJ/mol/nm, which the step sees as a speed beyond CommonStepFailure::LargestSpeed. (A
+    // kJ/mol/nm, which the step sees as a speed beyond CommonRigidBodyState::LargestSpeed. (A
     // NaN force arrives as that too on x86, as through pocl, but as 0 on CUDA: not tested.)
     System system;
     for (double m : {16.0, 1.0, 1.0})
@@ -603,7 +603,7 @@ double largestOHError(const vector<Vec3>& x) {
 TEST_P(DevicePlatform, WaterShapesStayExactFarFromTheOriginLikeSettle) {
     // 27 rigid TIP3P waters (constrained as OpenMM's rigid water is) 30 nm from the origin,
     // no forces, 50,000 steps of 2 fs: each step rebuilds a body from its reference geometry
-    // (CommonRigidBodyDynamics::setReference), so the O-H error stays at the storage's
+    // (CommonRigidBodyState::setReference), so the O-H error stays at the storage's
     // round-off as SETTLE's does instead of random-walking (before: 300x SETTLE's in single
     // precision after 10,000 steps). The yardstick: OpenMM's Verlet with SETTLE, same run.
     const double OH = 0.09572, HH = 2 * OH * std::sin(104.52 * M_PI / 360);

@@ -1,23 +1,54 @@
-#include "CommonMRattleKernels.h"
+#include "CommonStepKernels.h"
+#include "MRattleLangevinIntegrator.h"
+#include "openmm/common/ContextSelector.h"
+#include "openmm/reference/SimTKOpenMMRealType.h"
+#include <cmath>
 
 using namespace MRattlePlugin;
 using namespace OpenMM;
 
-void CommonIntegrateMRattleStepKernel::execute(ContextImpl& context, const MRattleIntegrator& integrator,
+void CommonIntegrateMRattleStepKernel::initialize(const System& system, const RigidBodyTopology& topology,
+                                                  const RigidBodyIntegrator& integrator) {
+    state.initialize(system, topology);
+}
+
+void CommonIntegrateMRattleStepKernel::execute(ContextImpl& context, const RigidBodyIntegrator& integrator,
                                                bool& forcesAreValid) {
-    ContextSelector selector(dynamics.computeContext());
+    ContextSelector selector(state.computeContext());
     const double h = integrator.getStepSize();
-    // Velocity Verlet: half kick, drift and reset (one pass), new forces, half kick and
-    // projection (one pass).
-    dynamics.beginStep(context, integrator, forcesAreValid);
-    CommonRigidBodyDynamics::Pass first;
-    first.kickTime = 0.5 * h;
-    first.driftTime = h;
-    dynamics.advance(first);
-    dynamics.computeForces(context, integrator, forcesAreValid);
-    CommonRigidBodyDynamics::Pass second;
-    second.kickTime = 0.5 * h;
-    second.projectAfterKick = true;
-    dynamics.advance(second);
-    dynamics.endStep(h, forcesAreValid);
+    state.beginStep(context, integrator, forcesAreValid);
+    state.kick(0.5 * h);
+    state.driftAndReset(h);
+    state.computeForces(context, integrator, forcesAreValid);
+    state.kick(0.5 * h);
+    state.project();
+    state.endStep(h, forcesAreValid);
+}
+
+void CommonIntegrateMRattleLangevinStepKernel::initialize(const System& system, const RigidBodyTopology& topology,
+                                                          const RigidBodyIntegrator& integrator) {
+    state.initialize(system, topology);
+    state.initRandomNumbers(static_cast<const MRattleLangevinIntegrator&>(integrator).getRandomNumberSeed());
+}
+
+void CommonIntegrateMRattleLangevinStepKernel::execute(ContextImpl& context, const RigidBodyIntegrator& base,
+                                                       bool& forcesAreValid) {
+    const MRattleLangevinIntegrator& integrator = static_cast<const MRattleLangevinIntegrator&>(base);
+    ContextSelector selector(state.computeContext());
+    const double h = integrator.getStepSize(), friction = integrator.getFriction();
+    state.beginStep(context, integrator, forcesAreValid);
+    state.kick(h);
+    state.project();
+    if (friction == 0)
+        state.driftAndReset(h);
+    else {
+        const double a = std::exp(-friction * h);
+        state.driftAndReset(0.5 * h);
+        state.addNoise(a, std::sqrt((1 - a * a) * BOLTZ * integrator.getTemperature()));
+        state.project();
+        state.driftAndReset(0.5 * h);
+    }
+    state.project();
+    state.computeForces(context, integrator, forcesAreValid);
+    state.endStep(h, forcesAreValid);
 }

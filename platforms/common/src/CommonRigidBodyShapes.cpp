@@ -1,40 +1,24 @@
 /*
- * CommonRigidBodyDynamics and the bodies' shapes: classified when positions are set, their
- * reference geometry and orientation (from which every step rebuilds them), and those in
- * checkpoints.
+ * CommonRigidBodyState: the bodies' shapes (classified when positions are set), their
+ * reference geometry and orientation (from which every step rebuilds them), and checkpoints.
  */
-#include "CommonRigidBodyDynamics.h"
+#include "CommonRigidBodyState.h"
 #include "internal/FiniteValues.h"
 #include "openmm/OpenMMException.h"
+#include "openmm/common/ContextSelector.h"
 #include "openmm/internal/ContextImpl.h"
 #include <algorithm>
+#include <cmath>
 #include <cstdint>
 #include <iterator>
-#include <cmath>
 
 using namespace MRattlePlugin;
 using namespace OpenMM;
 using std::vector;
 
-namespace {
-
-/** The reference geometry (3 numbers per body atom) and the orientations (9 per body), in double. */
-template <class Vector4, class Real>
-void appendShapeState(const ComputeArray& reference, const ComputeArray& orientation, vector<double>& values) {
-    vector<Vector4> positions;
-    reference.download(positions);
-    for (const Vector4& r : positions)
-        values.insert(values.end(), {(double) r.x, (double) r.y, (double) r.z});
-    vector<Real> matrices;
-    orientation.download(matrices);
-    values.insert(values.end(), matrices.begin(), matrices.end());
-}
-
-} // namespace
-
-double CommonRigidBodyDynamics::storageError(ContextImpl& context, const vector<Vec3>& positions) const {
+double CommonRigidBodyState::storageError(ContextImpl& context, const vector<Vec3>& positions) const {
     // Relative round-off of a stored coordinate: double, or float (mixed precision too: OpenMM
-    // 7.7 stores positions set from the host without their float correction, measured).
+    // 7.7 stores positions set from the host without their float correction).
     const double roundoff = cc.getUseDoublePrecision() ? std::ldexp(1.0, -53) : std::ldexp(1.0, -24);
     // OpenMM stores coordinates shifted into the periodic box: up to a box length more.
     Vec3 a, b, c;
@@ -46,17 +30,16 @@ double CommonRigidBodyDynamics::storageError(ContextImpl& context, const vector<
     return roundoff * (coordinate + largest);
 }
 
-void CommonRigidBodyDynamics::updateShapes(ContextImpl& context) {
+void CommonRigidBodyState::updateShapes(ContextImpl& context) {
     if (writingCorrectedShapes)
         return;  // the positions this call itself is writing: classified below, once written
-    stepFailure.rememberOrder();  // setting positions clears OpenMM's cell offsets
-    // Positions were just uploaded from the host: classify on the host with the core.
+    ContextSelector selector(cc);
+    rememberOrder();  // setting positions clears OpenMM's cell offsets
     vector<Vec3> positions;
     context.getPositions(positions);
     FiniteValues::require(positions, "position");
     if (shapeConstraints->apply(positions, storageError(context, positions))) {
-        // Back to the device, once: the correction is left alone by its own notification,
-        // and a body on its geometry to the storage's precision is not corrected again.
+        // Back to the device once; a body on its geometry to the storage's precision is not corrected again.
         writingCorrectedShapes = true;
         try {
             context.setPositions(positions);
@@ -78,9 +61,8 @@ void CommonRigidBodyDynamics::updateShapes(ContextImpl& context) {
     bodyShape.upload(codes);
 }
 
-void CommonRigidBodyDynamics::setReference(const vector<Vec3>& positions) {
-    // In double, and fully constrained bodies exactly on their constraint geometry (not the
-    // storage's rounding of it): the shape every step rebuilds.
+void CommonRigidBodyState::setReference(const vector<Vec3>& positions) {
+    // In double, fully constrained bodies exactly on their constraint geometry: the shape every step rebuilds.
     vector<Vec3> exact = positions;
     shapeConstraints->applyExactly(exact);
     vector<mm_double4> reference(std::max<size_t>(1, systemBodyAtoms.size()), mm_double4(0, 0, 0, 0));
@@ -102,32 +84,38 @@ void CommonRigidBodyDynamics::setReference(const vector<Vec3>& positions) {
     bodyOrientation.upload(identityOrientations(), true);
 }
 
-vector<double> CommonRigidBodyDynamics::identityOrientations() const {
+vector<double> CommonRigidBodyState::identityOrientations() const {
     vector<double> orientations(9 * std::max(1, numBodies), 0.0);
     for (size_t b = 0; b < orientations.size(); b += 9)
         orientations[b] = orientations[b + 4] = orientations[b + 8] = 1;
     return orientations;
 }
 
-void CommonRigidBodyDynamics::createCheckpoint(std::ostream& stream) const {
-    stepFailure.synchronize();
-    // The random stream (Andersen collisions, Langevin noise) is OpenMM's
-    // IntegrationUtilities', which OpenMM's own part of the checkpoint holds. Ours: the
-    // bodies' reference geometry (it stays that of the positions first set).
+void CommonRigidBodyState::createCheckpoint(ContextImpl& context, std::ostream& stream) const {
+    ContextSelector selector(cc);
+    const_cast<CommonRigidBodyState*>(this)->synchronize();  // a step not yet checked may have failed
+    // The integrator's declared arrays first, in its own layout; then the bodies' reference
+    // geometry and orientations, which read to the end. The random stream is OpenMM's, in its part.
+    if (writeIntegratorCheckpoint)
+        writeIntegratorCheckpoint(integratorValues(), stream);
     vector<double> values;
     if (rebuildsShapes()) {
-        if (bodyReference.getElementSize() == sizeof(mm_double4))
-            appendShapeState<mm_double4, double>(bodyReference, bodyOrientation, values);
-        else
-            appendShapeState<mm_float4, float>(bodyReference, bodyOrientation, values);
+        const vector<double> reference = downloadAsDouble(bodyReference, 4);
+        for (size_t k = 0; k < reference.size(); k += 4)
+            values.insert(values.end(), {reference[k], reference[k + 1], reference[k + 2]});
+        const vector<double> orientations = downloadAsDouble(bodyOrientation);
+        values.insert(values.end(), orientations.begin(), orientations.end());
     }
-    // Unframed: the checkpoint header (RigidBodyCheckpointHeader) frames the kernel's state.
     stream.write((const char*) values.data(), values.size() * sizeof(double));
 }
 
-void CommonRigidBodyDynamics::loadCheckpoint(std::istream& stream) {
-    // The stream holds exactly what createCheckpoint() wrote. Checkpoints of format 3 hold
-    // the device's own 4-byte length prefix of an empty state instead: no state.
+void CommonRigidBodyState::loadCheckpoint(ContextImpl& context, std::istream& stream) {
+    ContextSelector selector(cc);
+    IntegratorParameterValues integratorValues;
+    if (readIntegratorCheckpoint)
+        integratorValues = readIntegratorCheckpoint(stream);
+    // The rest of the stream is what createCheckpoint() wrote after them. Checkpoints of
+    // format 3 hold the device's own 4-byte length prefix of an empty state instead: no state.
     std::string state((std::istreambuf_iterator<char>(stream)), std::istreambuf_iterator<char>());
     if (state == std::string(sizeof(int32_t), '\0'))
         state.clear();
@@ -147,6 +135,12 @@ void CommonRigidBodyDynamics::loadCheckpoint(std::istream& stream) {
         bodyOrientation.upload(vector<double>(values.begin() + 3 * reference.size(), values.end()), true);
         keepReference = true;
     }
-    stepFailure.reset();
-    stepFailure.rememberOrder();
+    resetFailure();
+    rememberOrder();
+    if (readIntegratorCheckpoint)
+        setIntegratorParameters(context, integratorValues);
+}
+
+void CommonRigidBodyState::discardRefusedCheckpoint(ContextImpl& context) {
+    // OpenMM's device random state is its own and stays valid; nothing of ours was read.
 }

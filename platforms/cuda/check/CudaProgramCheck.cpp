@@ -4,8 +4,8 @@
  * CudaContext::createModule builds it (OpenMM 8.5.2): the context's defines, the real/mixed
  * typedefs, CudaKernelSources::common, the program's defines, CudaKernelSources::vectorOps
  * (compileProgram's prefix) and the program; options "-arch=compute_<arch> --use_fast_math".
- * The programs and their defines are the plugin's own (CommonRigidBodyDynamics::programSource
- * and programDefines, thermostatSources). Only the context's defines are copied here from
+ * The programs and their defines are the plugin's own (CommonRigidBodyState::programSource
+ * and programDefines). Only the context's defines are copied here from
  * CudaContext's constructor (a CUDA driver >= 9.0, a rectangular box): OpenMM keeps them private.
  *
  * usage: cuda_program_check OUTPUT_DIR [ARCH]   (ARCH: 90 for compute_90 unless given)
@@ -14,8 +14,7 @@
  * PTX for `ptxas -arch=sm_<arch> -v`: registers and spills); exits 1 if any program fails.
  */
 #include "CommonMRattleKernelSources.h"
-#include "CommonRigidBodyDynamics.h"
-#include "CommonThermostatKernels.h"
+#include "CommonRigidBodyState.h"
 #include <algorithm>
 #include <fstream>
 #include <iostream>
@@ -194,17 +193,17 @@ int main(int argc, char** argv) {
     int major = 0, minor = 0;
     nvrtcVersion(&major, &minor);
     std::cout << "NVRTC " << major << "." << minor << ", compute_" << arch << "\n";
-    // The programs the plugin compiles: the step (CommonRigidBodyDynamics::initialize, with
-    // collisions.cc when the System has an AndersenThermostat), the thermostats' (the step's
-    // with thermostats.cc) and the body kinetic energy (CommonBodyKineticEnergy, no defines).
+    // The programs the plugin compiles (CommonRigidBodyState::initialize): the step's, with
+    // collisions.cc when the System has an AndersenThermostat, with thermostats.cc for the
+    // thermostats; and the body kinetic energy (computeKineticEnergies, no defines).
     const std::vector<std::pair<std::string, std::string>> stepPrograms = {
-        {"step", CommonRigidBodyDynamics::programSource("")},
-        {"step+collisions", CommonRigidBodyDynamics::programSource(CommonMRattleKernelSources::collisions)},
-        {"step+thermostats", CommonRigidBodyDynamics::programSource(thermostatSources())}};
+        {"step", CommonRigidBodyState::programSource("")},
+        {"step+collisions", CommonRigidBodyState::programSource(CommonMRattleKernelSources::collisions)},
+        {"step+thermostats", CommonRigidBodyState::programSource(CommonMRattleKernelSources::thermostats)}};
     const Precision precisions[] = {{"single", false, false}, {"mixed", false, true}, {"double", true, false}};
     int failed = 0;
     for (const Precision& p : precisions) {
-        const Defines defines = CommonRigidBodyDynamics::programDefines(p.useDouble, p.useMixed);
+        const Defines defines = CommonRigidBodyState::programDefines(p.useDouble, p.useMixed);
         for (const auto& program : stepPrograms)
             failed += !compile(program.first, p, moduleText(p, program.second, defines), arch, outputDir);
         failed += !compile("bodyKineticEnergy", p, moduleText(p, CommonMRattleKernelSources::bodyKineticEnergy, {}),

@@ -1,25 +1,15 @@
-/*
- * The plugin's kernels on OpenMM's CUDA platform: the common kernels (platforms/common) on
- * the Context's CudaContext, which is OpenMM's ComputeContext for CUDA. Which kernels exist,
- * and the refusal of RigidSplittingIntegrator's, are the common factory's (createCommonKernel,
- * registerCommonKernels); this file only finds the device context.
- */
-#include "CommonMRattleKernelFactory.h"
-#include "CommonStepFailure.h"
-#include "internal/OpenMMVersionCheck.h"
-#include "openmm/KernelFactory.h"
-#include "openmm/OpenMMException.h"
-#include "openmm/cuda/CudaContext.h"
+// The plugin's kernels on OpenMM's CUDA platform: the common kernels over the Context's CudaContext.
+#include "CommonKernelFactory.h"
+#include "CommonRigidBodyState.h"
 #include "openmm/cuda/CudaPlatform.h"
-#include "openmm/internal/ContextImpl.h"
 #include "openmm/internal/windowsExport.h"
-#include <string>
+#include <cuda.h>
 
-using namespace OpenMM;
+using namespace MRattlePlugin;
 
 namespace {
 
-/** Page-locked host memory (as CudaContext's pinned buffer): an asynchronous copy into pageable memory waits for the stream. */
+/** Page-locked host memory: CUDA copies asynchronously only into it (the failure flag's lazy copy). */
 void* allocatePageLocked(size_t bytes) {
     void* memory = nullptr;
     return cuMemHostAlloc(&memory, bytes, CU_MEMHOSTALLOC_PORTABLE) == CUDA_SUCCESS ? memory : nullptr;
@@ -29,30 +19,10 @@ void releasePageLocked(void* memory) {
     cuMemFreeHost(memory);
 }
 
-class CudaMRattleKernelFactory : public KernelFactory {
-public:
-    KernelImpl* createKernelImpl(std::string name, const Platform& platform, ContextImpl& context) const override {
-        CudaPlatform::PlatformData& data = *static_cast<CudaPlatform::PlatformData*>(context.getPlatformData());
-        if (data.contexts.size() != 1)
-            throw OpenMMException("MRattleIntegrator on CUDA runs on one device; this Context uses " +
-                                  std::to_string(data.contexts.size()) + " (set the DeviceIndex property to one device)");
-        ComputeContext& cc = *data.contexts[0];
-        return MRattlePlugin::createCommonKernel(name, platform, cc);
-    }
-};
-
-/**
- * Register the kernels on the CUDA platform, if present. File-local: every plugin exports a
- * registerKernelFactories(), and a call to that name could bind to another plugin's.
- */
+// File-local: every plugin exports a registerKernelFactories(), and a call to that name could bind to another's.
 void registerOnCuda() {
-    MRattlePlugin::checkOpenMMVersion(Platform::getOpenMMVersion());
-    MRattlePlugin::CommonStepFailure::setHostMemory({allocatePageLocked, releasePageLocked});
-    for (int i = 0; i < Platform::getNumPlatforms(); i++) {
-        Platform& platform = Platform::getPlatform(i);
-        if (platform.getName() == "CUDA")
-            MRattlePlugin::registerCommonKernels(platform, new CudaMRattleKernelFactory());
-    }
+    CommonRigidBodyState::setHostMemory({allocatePageLocked, releasePageLocked});
+    registerDeviceKernels("CUDA", computeContextOf<OpenMM::CudaPlatform::PlatformData>);
 }
 
 } // namespace

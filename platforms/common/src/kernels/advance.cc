@@ -4,8 +4,8 @@
  * (massless ones included, for the backup). Work items 0..numBodies-1 take the bodies,
  * then the clusters, then the free atoms. Each phase is done if asked for, in this order:
  *
- *   backup (backupStepIndex >= 0: the step's first pass), a thermostat's scaling of the
- *   velocities by velocityScale[0] (scaleVelocities), kick (kickTime != 0),
+ *   backup of the atoms and the integrator's arrays (backupStepIndex >= 0: the step's first
+ *   launch), scaling of the velocities by velocityScale[0] (scaleVelocities), kick (kickTime != 0),
  *   projection (projectAfterKick), drift and reset (driftTime != 0: M-RATTLE's reset for a
  *   body, SHAKE for a cluster, a drift for a free atom), Langevin friction and noise and a
  *   projection (noiseDecay != 1; at zero temperature noiseScale is 0), projection (projectAtEnd).
@@ -17,7 +17,7 @@
  *
  * A group's phases read and write only its own atoms, so no phase waits for another group.
  * A failure of any group sets failure[0] to 1 + stepIndex; the host puts back the backup
- * (CommonStepFailure). A work item that finds its own step failed when the pass is the
+ * (CommonRigidBodyFailure.cpp). A work item that finds its own step failed when the pass is the
  * step's backup still backs up its groups (and does nothing else), so the backup is of one time.
  *
  * (See bodyMath.cc for the program's layout and the failure flag.)
@@ -93,24 +93,21 @@ INLINE_DEVICE bool advanceBody(int body, int start, int end, GLOBAL const int* R
     return ok;
 }
 
-KERNEL void advanceGroups(int numBodies, int numClusters, int numFree, GLOBAL const int* RESTRICT bodyStart,
-        GLOBAL const int* RESTRICT bodyAtoms, GLOBAL const int* RESTRICT bodyShape,
-        GLOBAL mixed4* RESTRICT bodyReference, GLOBAL mixed* RESTRICT bodyOrientation,
-        GLOBAL const int* RESTRICT clusterStart,
-        GLOBAL const int2* RESTRICT constraintAtoms,
-        GLOBAL const mixed* RESTRICT constraintDistance, GLOBAL const int* RESTRICT clusterAtomStart,
-        GLOBAL const int* RESTRICT clusterAtoms, GLOBAL const int* RESTRICT freeAtoms,
-        GLOBAL real4* RESTRICT posq, GLOBAL real4* RESTRICT posqCorrection, GLOBAL mixed4* RESTRICT velm,
-        GLOBAL const mm_long* RESTRICT force, int paddedNumAtoms, GLOBAL mixed4* RESTRICT posDelta,
-        GLOBAL real4* RESTRICT posqBackup, GLOBAL real4* RESTRICT correctionBackup, GLOBAL mixed4* RESTRICT velmBackup,
-        int backupStepIndex, mixed kickTime, int projectAfterKick, mixed driftTime, mixed tolerance, mixed noiseDecay,
-        mixed noiseScale, GLOBAL const float4* RESTRICT random, unsigned int randomIndex, int projectAtEnd,
-        int resetFollows, GLOBAL int* RESTRICT failure, int stepIndex, GLOBAL const mixed* RESTRICT velocityScale,
-        int scaleVelocities) {
+KERNEL void advanceGroups(BODY_ARGUMENTS, int numClusters, int numFree, GLOBAL mixed4* RESTRICT bodyReference,
+        GLOBAL mixed* RESTRICT bodyOrientation, GLOBAL const int* RESTRICT clusterStart,
+        GLOBAL const int2* RESTRICT constraintAtoms, GLOBAL const mixed* RESTRICT constraintDistance,
+        GLOBAL const int* RESTRICT clusterAtomStart, GLOBAL const int* RESTRICT clusterAtoms,
+        GLOBAL const int* RESTRICT freeAtoms, GLOBAL const mm_long* RESTRICT force, int paddedNumAtoms,
+        GLOBAL mixed4* RESTRICT posDelta, BACKUP_ARGUMENTS, mixed kickTime, int projectAfterKick, mixed driftTime,
+        mixed tolerance, mixed noiseDecay, mixed noiseScale, GLOBAL const float4* RESTRICT random,
+        unsigned int randomIndex, int projectAtEnd, int resetFollows, GLOBAL int* RESTRICT failure, int stepIndex,
+        GLOBAL const mixed* RESTRICT velocityScale, int scaleVelocities) {
     const int failed = failure[0];
     if (skipAfterFailure(failed, backupStepIndex))
         return;
     const bool onlyBackup = failed != 0;  // another group of this step failed: only its backup
+    if (backupStepIndex >= 0)
+        backupIntegratorArrays(integratorArrays, integratorBackup, integratorSize);
     const mixed kickScale = kickTime/(mixed) 0x100000000;
     const mixed velocityFactor = scaleVelocities ? velocityScale[0] : (mixed) 1;
     const int numGroups = numBodies + numClusters + numFree;

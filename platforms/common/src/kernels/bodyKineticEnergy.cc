@@ -1,6 +1,6 @@
 /*
  * The kinetic energy of each rigid body split into its centre-of-mass translation and its
- * rotation (CommonBodyKineticEnergy): one work item per body, in 'mixed' precision.
+ * rotation (CommonRigidBodyState::computeKineticEnergies): one work item per body, in 'mixed' precision.
  * energy[3*body] = M V^2 / 2, energy[3*body + 1] = sum m |v - V|^2 / 2 over its atoms,
  * energy[3*body + 2] = sum m v^2 / 2 over its atoms (V its centre-of-mass velocity, M its mass).
  */

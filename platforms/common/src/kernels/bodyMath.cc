@@ -1,19 +1,35 @@
 /*
  * Small 3x3 algebra, positions, failures, body centres and kicks: what every other file uses.
  *
- * The device code of the M-RATTLE integrators on OpenMM's common compute platforms
- * (OpenCL, CUDA), compiled as one program in the order bodyMath, rotation, step,
- * freeConstraints, projection (collisions and langevin with it where used). Integration
- * arithmetic is in 'mixed' precision (double in the mixed and double modes). Constants
- * shared with the host (iteration limits, tolerances) come from the host as defines.
+ * The step's device code on OpenMM's common compute platforms (OpenCL, CUDA), one program in
+ * the order bodyMath, rotation, step, freeConstraints, projection, advance, reduction, then an
+ * integrator's own (collisions, thermostats). Integration arithmetic is 'mixed' (double in
+ * the mixed and double modes); the host's constants come as defines.
  *
  * failure[0] holds 0, or 1 + the index of the step (since the host's last check) in which a
- * reset, a constraint or a velocity failed: every kernel that would change the state then
- * does nothing, but for the backup of that same step (a work group backs up its atoms
- * whatever another group of its launch found, so the backup is of one time), until the host
- * finds it (lazily, or at the end of step(n): CommonStepFailure.h) and puts back the state
- * from before that step.
+ * reset, a constraint or a velocity failed: every kernel that would change the state then does
+ * nothing, but for the step's backup by that same step's first launch (so the backup is of one
+ * time), until the host finds it and puts back the state from before that step.
  */
+
+/** What every per-body kernel takes first (CommonRigidBodyState::addBodyArguments). */
+#define BODY_ARGUMENTS int numBodies, GLOBAL const int* RESTRICT bodyStart, GLOBAL const int* RESTRICT bodyAtoms, \
+        GLOBAL const int* RESTRICT bodyShape, GLOBAL real4* RESTRICT posq, GLOBAL real4* RESTRICT posqCorrection, \
+        GLOBAL mixed4* RESTRICT velm
+
+/**
+ * What an integrator's own kernel takes first (CommonRigidBodyState::integratorArguments): the
+ * failure flag and what it records, the integrator's declared arrays, the velocity factor of
+ * the next scaleVelocities phase, and the kinetic energy's partial sums (addPartialSums).
+ */
+#define STATE_ARGUMENTS GLOBAL int* RESTRICT failure, int stepIndex, GLOBAL mixed* RESTRICT integratorArrays, \
+        GLOBAL mixed* RESTRICT velocityScale, GLOBAL const mixed* RESTRICT partials, \
+        GLOBAL const int* RESTRICT partialCount
+
+/** What the step's first launch takes to back up the state: atoms and the integrator's arrays. */
+#define BACKUP_ARGUMENTS GLOBAL real4* RESTRICT posqBackup, GLOBAL real4* RESTRICT correctionBackup, \
+        GLOBAL mixed4* RESTRICT velmBackup, GLOBAL const mixed* RESTRICT integratorArrays, \
+        GLOBAL mixed* RESTRICT integratorBackup, int integratorSize, int backupStepIndex
 
 /*
  * A body's shape, as the host classifies it when positions are set (bodyShape[body]):
@@ -23,11 +39,7 @@
  * finite (NaN fails every comparison).
  */
 
-/*
- * Every helper here is inlined. pocl (OpenCL on a CPU) otherwise compiles the larger ones as
- * calls that pass 3x3 matrices through the stack, which cost 6-10% of MRattleIntegrator's
- * step (512 and 4,096 waters, single precision). GPU compilers inline them anyway.
- */
+/* Every helper is inlined: pocl (OpenCL on a CPU) would pass 3x3 matrices through the stack. */
 #if defined(__OPENCL_VERSION__) && defined(__clang__)
 #define INLINE_DEVICE static inline __attribute__((always_inline))
 #else
@@ -160,8 +172,7 @@ typedef struct {
  * second moment and angular momentum, summed about its first atom and moved to the centre
  * (J_c = J_0 - M c c^T, L_c = L_0 - M c x V), so the reset and the projection read the atoms
  * once before they write them. With checkShape, also how far the body's shape, seen from
- * its first atom, is from its reference geometry turned by Q. (Folding the step's backup
- * and kick into this loop made it no faster through pocl: they stay a loop of their own.)
+ * its first atom, is from its reference geometry turned by Q.
  */
 INLINE_DEVICE BodySums gatherBody(int start, int end, GLOBAL const int* RESTRICT bodyAtoms,
         GLOBAL const real4* RESTRICT posq, GLOBAL const real4* RESTRICT posqCorrection,

@@ -7,10 +7,8 @@
  *
  * (See bodyMath.cc for the program's layout and the failure flag.)
  */
-KERNEL void collideBodies(int numBodies, GLOBAL const int* RESTRICT bodyStart, GLOBAL const int* RESTRICT bodyAtoms,
-        GLOBAL const int* RESTRICT bodyShape, GLOBAL const real4* RESTRICT posq,
-        GLOBAL const real4* RESTRICT posqCorrection, GLOBAL mixed4* RESTRICT velm, mixed kT,
-        GLOBAL const float4* RESTRICT random, unsigned int randomIndex, GLOBAL const int* RESTRICT failure) {
+KERNEL void collideBodies(BODY_ARGUMENTS, mixed kT, GLOBAL const float4* RESTRICT random, unsigned int randomIndex,
+        GLOBAL const int* RESTRICT failure) {
     if (failure[0] != 0)
         return;
     for (int body = GLOBAL_ID; body < numBodies; body += GLOBAL_SIZE) {

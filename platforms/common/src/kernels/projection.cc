@@ -98,10 +98,7 @@ INLINE_DEVICE void projectBody(int start, int end, GLOBAL const int* RESTRICT bo
 }
 
 /** Every body's projection (velocities set from the host, Andersen collisions). */
-KERNEL void projectBodies(int numBodies, GLOBAL const int* RESTRICT bodyStart, GLOBAL const int* RESTRICT bodyAtoms,
-        GLOBAL const int* RESTRICT bodyShape, GLOBAL const real4* RESTRICT posq,
-        GLOBAL const real4* RESTRICT posqCorrection, GLOBAL mixed4* RESTRICT velm, int onlyIfNotRigid,
-        GLOBAL const int* RESTRICT failure) {
+KERNEL void projectBodies(BODY_ARGUMENTS, int onlyIfNotRigid, GLOBAL const int* RESTRICT failure) {
     if (failure[0] != 0)
         return;
     for (int body = GLOBAL_ID; body < numBodies; body += GLOBAL_SIZE)

@@ -28,6 +28,13 @@ INLINE_DEVICE void backupAtom(int atom, GLOBAL const real4* RESTRICT posq, GLOBA
     velmBackup[atom] = velm[atom];
 }
 
+/** The integrator's declared arrays into their backup (the step's first launch), across the launch's work items. */
+INLINE_DEVICE void backupIntegratorArrays(GLOBAL const mixed* RESTRICT integratorArrays,
+        GLOBAL mixed* RESTRICT integratorBackup, int integratorSize) {
+    for (int i = GLOBAL_ID; i < integratorSize; i += GLOBAL_SIZE)
+        integratorBackup[i] = integratorArrays[i];
+}
+
 /** A kick of one atom's velocity with the Context's forces; false if the velocity is then not finite. */
 INLINE_DEVICE bool kickAtom(int atom, mixed scale, GLOBAL const mm_long* RESTRICT force, int paddedNumAtoms,
         GLOBAL mixed4* RESTRICT velm) {

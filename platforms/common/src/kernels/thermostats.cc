@@ -1,78 +1,13 @@
 /*
  * The thermostats that scale every velocity by one factor (MRattleNoseHooverIntegrator,
- * MRattleBussiIntegrator), with nothing read by the host. A half step is:
- *
- *   thermostatPartialSums  every work group of the device sums its atoms' share of twice the
- *                          kinetic energy (and, for CSVR, of the squared Gaussian numbers)
- *                          into partials[2 GROUP_ID], [2 GROUP_ID + 1];
- *   noseHooverChainHalfStep or stochasticRescalingHalfStep
- *                          one work group of THERMOSTAT_THREADS (defined by the host) adds
- *                          the partial sums, and its first work item turns them into the
- *                          factor (velocityScale[0]), no work per atom;
- *   the scaling            in the step's first pass for the first half step (advance.cc,
- *                          which also makes the step's backup), scaleVelocities for the second.
- *
- * The maths is RigidBodyThermostats' (openmmapi/src/RigidBodyThermostats.cpp), which the
- * tests hold it to.
+ * MRattleBussiIntegrator), nothing read by the host. A half step is the state's
+ * sumKineticEnergy (reduction.cc), then one of these kernels, one work group that adds the
+ * partial sums and turns them into the factor (velocityScale[0]), then the state's
+ * scaleVelocities phase. The maths is RigidBodyThermostats' (openmmapi), which the tests
+ * hold it to. The chain and the work are declared arrays: the state backs them up.
  *
  * (See bodyMath.cc for the program's layout and the failure flag.)
  */
-
-/** Sum two arrays of the work group (one value per work item) into their first elements. */
-DEVICE void sumOverGroup(LOCAL_ARG mixed* sums, LOCAL_ARG mixed* sums2) {
-    SYNC_THREADS;
-    for (int stride = LOCAL_SIZE/2; stride > 0; stride /= 2) {
-        if (LOCAL_ID < stride) {
-            sums[LOCAL_ID] += sums[LOCAL_ID+stride];
-            sums2[LOCAL_ID] += sums2[LOCAL_ID+stride];
-        }
-        SYNC_THREADS;
-    }
-}
-
-/**
- * Twice the kinetic energy of the massive atoms and the sum of gaussian[k]^2 for
- * 1 <= k < numGaussians (gaussian: OpenMM's random numbers from randomIndex), each work
- * group's share into partials; partialCount[0] = the number of work groups.
- */
-KERNEL void thermostatPartialSums(int numAtoms, GLOBAL const mixed4* RESTRICT velm, GLOBAL const float4* RESTRICT random,
-        unsigned int randomIndex, int numGaussians, GLOBAL mixed* RESTRICT partials, GLOBAL int* RESTRICT partialCount) {
-    LOCAL mixed sums[THERMOSTAT_THREADS];
-    LOCAL mixed squares[THERMOSTAT_THREADS];
-    mixed sum = 0;
-    for (int atom = GLOBAL_ID; atom < numAtoms; atom += GLOBAL_SIZE) {
-        const mixed4 v = velm[atom];
-        if (v.w != 0)
-            sum += (v.x*v.x + v.y*v.y + v.z*v.z)/v.w;
-    }
-    GLOBAL const float* gaussian = (GLOBAL const float*) (random + randomIndex);
-    mixed square = 0;
-    for (int k = 1 + GLOBAL_ID; k < numGaussians; k += GLOBAL_SIZE)
-        square += (mixed) gaussian[k]*gaussian[k];
-    sums[LOCAL_ID] = sum;
-    squares[LOCAL_ID] = square;
-    sumOverGroup(sums, squares);
-    if (LOCAL_ID == 0) {
-        partials[2*GROUP_ID] = sums[0];
-        partials[2*GROUP_ID+1] = squares[0];
-    }
-    if (GLOBAL_ID == 0)
-        partialCount[0] = NUM_GROUPS;
-}
-
-/** thermostatPartialSums' partial sums added up by one work group, into sums[0] and squares[0]. */
-DEVICE void addPartialSums(GLOBAL const mixed* RESTRICT partials, GLOBAL const int* RESTRICT partialCount,
-        LOCAL_ARG mixed* sums, LOCAL_ARG mixed* squares) {
-    mixed sum = 0, square = 0;
-    const int count = partialCount[0];
-    for (int g = LOCAL_ID; g < count; g += LOCAL_SIZE) {
-        sum += partials[2*g];
-        square += partials[2*g+1];
-    }
-    sums[LOCAL_ID] = sum;
-    squares[LOCAL_ID] = square;
-    sumOverGroup(sums, squares);
-}
 
 /**
  * The factor for every velocity; one that is not finite (from a kinetic energy that is not)
@@ -84,18 +19,6 @@ DEVICE void setVelocityScale(mixed factor, GLOBAL mixed* RESTRICT velocityScale,
         velocityScale[0] = factor;
     else
         recordFailure(failure, stepIndex);
-}
-
-/** Every velocity times velocityScale[0] (the second half step; the first is applied in the step's first pass). */
-KERNEL void scaleVelocities(int numAtoms, GLOBAL mixed4* RESTRICT velm, GLOBAL const mixed* RESTRICT velocityScale,
-        GLOBAL const int* RESTRICT failure) {
-    if (failure[0] != 0)
-        return;
-    const mixed factor = velocityScale[0];
-    for (int atom = GLOBAL_ID; atom < numAtoms; atom += GLOBAL_SIZE) {
-        const mixed4 v = velm[atom];
-        velm[atom] = make_mixed4(factor*v.x, factor*v.y, factor*v.z, v.w);
-    }
 }
 
 /** The chain's acceleration G_j with its mass divided out (RigidBodyThermostats::NoseHooverChain::propagate). */
@@ -121,30 +44,18 @@ DEVICE void chainHalfUpdate(int j, mixed s, int chainLength, mixed twiceKinetic,
 /**
  * Half a step of the Nose-Hoover chain (numMTS sub-steps, each a Yoshida-Suzuki composition
  * with the given weights) from the kinetic energy's partial sums: the factor of every
- * velocity into velocityScale[0]. One work group. The first half step of a step
- * (backupStepIndex >= 0) backs up the chain first, even when a failure of this same step is
- * already recorded (the step's backup is of one time).
+ * velocity into velocityScale[0]. One work group.
  */
-KERNEL void noseHooverChainHalfStep(GLOBAL const mixed* RESTRICT partials, GLOBAL const int* RESTRICT partialCount,
-        int chainLength, GLOBAL mixed* RESTRICT chainPosition, GLOBAL mixed* RESTRICT chainVelocity,
+KERNEL void noseHooverChainHalfStep(STATE_ARGUMENTS, int chainLength, int positionOffset, int velocityOffset,
         GLOBAL const mixed* RESTRICT weights, int numWeights, int numMTS, mixed dof, mixed kT, mixed frequency,
-        mixed halfStep, GLOBAL mixed* RESTRICT velocityScale, GLOBAL int* RESTRICT failure, int backupStepIndex,
-        GLOBAL mixed* RESTRICT chainPositionBackup, GLOBAL mixed* RESTRICT chainVelocityBackup, int stepIndex) {
-    LOCAL mixed sums[THERMOSTAT_THREADS];
-    LOCAL mixed unused[THERMOSTAT_THREADS];
+        mixed halfStep) {
+    LOCAL mixed sums[REDUCTION_THREADS];
+    LOCAL mixed unused[REDUCTION_THREADS];
     addPartialSums(partials, partialCount, sums, unused);
-    if (LOCAL_ID != 0)
+    if (LOCAL_ID != 0 || failure[0] != 0)
         return;
-    const int failed = failure[0];
-    if (skipAfterFailure(failed, backupStepIndex))
-        return;
-    if (backupStepIndex >= 0)  // the chain before the step
-        for (int j = 0; j < chainLength; j++) {
-            chainPositionBackup[j] = chainPosition[j];
-            chainVelocityBackup[j] = chainVelocity[j];
-        }
-    if (failed != 0)
-        return;
+    GLOBAL mixed* chainPosition = integratorArrays + positionOffset;
+    GLOBAL mixed* chainVelocity = integratorArrays + velocityOffset;
     const mixed w2 = frequency*frequency;
     mixed twiceKinetic = sums[0], scale = 1;
     for (int mts = 0; mts < numMTS; mts++)
@@ -166,27 +77,18 @@ KERNEL void noseHooverChainHalfStep(GLOBAL const mixed* RESTRICT partials, GLOBA
 /**
  * Half a step of stochastic velocity rescaling (Bussi, Donadio and Parrinello 2007): the new
  * kinetic energy drawn exactly, with R_1 (gaussian[0]) and the dof - 1 other squared standard
- * normals (their sum, the paper's chi-squared variable, from the partial sums) from OpenMM's
- * device Gaussian numbers; c = exp(-frequency * halfStep). Adds the change of kinetic energy
- * to work[0]; the factor into velocityScale[0]. One work group; the first half step of a
- * step backs up the work as the chain's does.
+ * normals (their sum, from the partial sums) from OpenMM's device Gaussian numbers;
+ * c = exp(-frequency * halfStep). Adds the change of kinetic energy to the work
+ * (integratorArrays[workOffset]); the factor into velocityScale[0]. One work group.
  */
-KERNEL void stochasticRescalingHalfStep(GLOBAL const mixed* RESTRICT partials, GLOBAL const int* RESTRICT partialCount,
-        GLOBAL const float4* RESTRICT random, unsigned int randomIndex, int dof, mixed kT, mixed c,
-        GLOBAL mixed* RESTRICT work, GLOBAL mixed* RESTRICT velocityScale, GLOBAL int* RESTRICT failure,
-        int backupStepIndex, GLOBAL mixed* RESTRICT workBackup, int stepIndex) {
-    LOCAL mixed sums[THERMOSTAT_THREADS];
-    LOCAL mixed squares[THERMOSTAT_THREADS];
+KERNEL void stochasticRescalingHalfStep(STATE_ARGUMENTS, GLOBAL const float4* RESTRICT random, unsigned int randomIndex,
+        int dof, mixed kT, mixed c, int workOffset) {
+    LOCAL mixed sums[REDUCTION_THREADS];
+    LOCAL mixed squares[REDUCTION_THREADS];
     addPartialSums(partials, partialCount, sums, squares);
-    if (LOCAL_ID != 0)
+    if (LOCAL_ID != 0 || failure[0] != 0)
         return;
-    const int failed = failure[0];
-    if (skipAfterFailure(failed, backupStepIndex))
-        return;
-    if (backupStepIndex >= 0)  // the work before the step
-        workBackup[0] = work[0];
-    if (failed != 0)
-        return;
+    GLOBAL mixed* work = integratorArrays + workOffset;
     const mixed kinetic = 0.5f*sums[0], meanKinetic = 0.5f*dof*kT;
     mixed alpha = 1;
     if (kinetic > 0 && dof > 0) {

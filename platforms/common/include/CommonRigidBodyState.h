@@ -1,0 +1,340 @@
+#ifndef MRATTLE_COMMON_RIGID_BODY_STATE_H_
+#define MRATTLE_COMMON_RIGID_BODY_STATE_H_
+
+#include "RigidBodyTopology.h"
+#include "internal/BodyShapeConstraints.h"
+#include "internal/RigidBodyState.h"
+#include "mrattle/RigidBodyMath.h"
+#include "openmm/System.h"
+#include "openmm/common/ComputeArray.h"
+#include "openmm/common/ComputeContext.h"
+#include "openmm/common/ComputeEvent.h"
+#include "openmm/common/ComputeKernel.h"
+#include "openmm/common/ComputeProgram.h"
+#include "openmm/common/ComputeVectorTypes.h"
+#include <functional>
+#include <iosfwd>
+#include <map>
+#include <memory>
+#include <string>
+#include <vector>
+
+namespace MRattlePlugin {
+
+class RigidBodyIntegrator;
+
+/**
+ * The rigid-body state on OpenMM's common compute platforms (OpenCL, CUDA), one per Context
+ * whatever the integrator: the bodies and free constraints on the device (mapped anew when
+ * OpenMM reorders atoms), their shapes and reference geometry, the step's phases, the
+ * integrator's own device arrays, and what a failed step puts back. Files, one class:
+ * CommonRigidBodyState.cpp (set-up, kinetic energies, velocities), CommonRigidBodyStep.cpp
+ * (the phases, the program, kernel arguments), CommonRigidBodyShapes.cpp (shapes,
+ * checkpoints), CommonRigidBodyFailure.cpp (failed steps found lazily and undone).
+ *
+ * A step is a list of phases (beginStep ... endStep). Consecutive phases that a group of
+ * atoms (a body, a cluster of free constraints, a free atom) can do alone are queued and
+ * run as one launch (advanceGroups in kernels/advance.cc) when a phase that needs the whole
+ * device comes: computeForces, endStep, sumKineticEnergy, an integrator's own kernel.
+ * Failures are found lazily: a failing kernel sets a device flag, read at most
+ * 2 FlagCopyInterval steps later or at the end of step(n).
+ */
+class CommonRigidBodyState : public RigidBodyState {
+public:
+    /** @param integratorName  what failures are reported as ("MRattleIntegrator") */
+    CommonRigidBodyState(OpenMM::ComputeContext& cc, const std::string& integratorName);
+    ~CommonRigidBodyState() override;
+    CommonRigidBodyState(const CommonRigidBodyState&) = delete;
+    CommonRigidBodyState& operator=(const CommonRigidBodyState&) = delete;
+
+    /**
+     * Upload the bodies and free constraints and compile the program: the step's device code
+     * with an integrator's own (sources), whose kernels it takes from program().
+     */
+    void initialize(const OpenMM::System& system, const RigidBodyTopology& topology, const std::string& sources = "");
+    OpenMM::ComputeContext& computeContext() {
+        return cc;
+    }
+    OpenMM::ComputeProgram& program() {
+        return stepProgram;
+    }
+    /** Start OpenMM's device random numbers, unless an AndersenThermostat already did (OpenMM has one generator). */
+    void initRandomNumbers(int seed);
+
+    /** The step's device code with these sources appended, and its defines (static: platforms/cuda/check compiles them). */
+    static std::string programSource(const std::string& sources);
+    static std::map<std::string, std::string> programDefines(bool useDouble, bool useMixed);
+
+    // ---- The phases of a step, in the order an integrator lists them.
+    /** Andersen collisions of whole bodies, then the forces unless valid for these positions and atom order. */
+    void beginStep(OpenMM::ContextImpl& context, const RigidBodyIntegrator& integrator, bool& forcesAreValid);
+    /** Every velocity times the factor an integrator's own kernel left in velocityScale[0] (a thermostat's). */
+    void scaleVelocities();
+    /** Velocities kicked over this time by the Context's forces. */
+    void kick(double time);
+    /** A drift over h with M-RATTLE's reset of each body and SHAKE for the free constraints. */
+    void driftAndReset(double h);
+    /** Langevin's friction and noise, v = decay v + scale sqrt(1/m) g; a project() must follow. */
+    void addNoise(double decay, double scale);
+    /** RATTLE's velocity step: bodies onto rigid-body motion, free constraints to the step's tolerance. */
+    void project();
+    /** Virtual sites at the new positions, then the forces there. */
+    void computeForces(OpenMM::ContextImpl& context, const RigidBodyIntegrator& integrator, bool& forcesAreValid);
+    /** The clock, OpenMM's reordering, and the lazy failure check (a failure found is undone and thrown). */
+    void endStep(double stepSize, bool& forcesAreValid);
+
+    // ---- What an integrator's own kernels use.
+    /**
+     * Declare a device array of the integrator's own (a thermostat's chain): `size` numbers in
+     * 'mixed' precision, named as a State's integrator parameter. The state backs it up with
+     * each step, puts it back when a step fails, and returns it from getIntegratorParameters.
+     * Returns its offset in integratorArrays(). Declare before the first step.
+     */
+    int declareIntegratorArray(const std::string& name, int size);
+    /** How the declared arrays go into checkpoints (their byte layout is the integrator's). */
+    typedef std::function<void(const IntegratorParameterValues& values, std::ostream& stream)> CheckpointWriter;
+    typedef std::function<IntegratorParameterValues(std::istream& stream)> CheckpointReader;
+    void setIntegratorCheckpoint(CheckpointWriter write, CheckpointReader read);
+    /**
+     * Add an integrator kernel's first arguments, STATE_ARGUMENTS in kernels/bodyMath.cc:
+     * the failure flag and step index, the declared arrays, the velocity scale and
+     * sumKineticEnergy's partial sums. Its own arguments follow (Arguments::add).
+     */
+    class Arguments;
+    Arguments integratorArguments(OpenMM::ComputeKernel& kernel);
+    /** Arguments of a kernel from the start, each add returning its index for setMixedArg/setArg. */
+    Arguments arguments(OpenMM::ComputeKernel& kernel);
+    /** Set a number in the integration arithmetic's precision ('mixed'). */
+    void setMixedArg(OpenMM::ComputeKernel& kernel, int index, double value) const;
+    /**
+     * Twice the kinetic energy as partial sums per work group (and the sum of the squares of
+     * numGaussians - 1 of OpenMM's Gaussian numbers, drawn here): returns the index of
+     * those numbers, for the kernel that adds the sums up (addPartialSums in the device code).
+     */
+    unsigned int sumKineticEnergy(int numGaussians = 0);
+    /** Launch an integrator kernel (made with integratorArguments) in the step's order. */
+    void launch(OpenMM::ComputeKernel& kernel, int workItems, int groupSize = -1);
+    /** The work-group size of sumKineticEnergy and of an integrator's one-group kernels (REDUCTION_THREADS). */
+    static constexpr int ReductionThreads = 128;
+    /** A device array of these numbers in the integration arithmetic's precision ('mixed'). */
+    void initializeMixedArray(OpenMM::ComputeArray& array, const std::vector<double>& values, const std::string& name);
+    /** The System's degrees of freedom, by the plugin's rule. */
+    int degreesOfFreedom() const;
+
+    // ---- RigidBodyState.
+    void updateShapes(OpenMM::ContextImpl& context) override;
+    void projectVelocities(OpenMM::ContextImpl& context, double tolerance) override;
+    std::vector<OpenMM::Vec3> getVelocitiesForTemperature(OpenMM::ContextImpl& context, double temperature,
+                                                          int randomSeed, double tolerance) override;
+    double computeKineticEnergy(OpenMM::ContextImpl& context) override;
+    void computeKineticEnergies(OpenMM::ContextImpl& context, double& translational, double& rotational,
+                                double& free) override;
+    void finishSteps(OpenMM::ContextImpl& context) override;
+    bool isBodyLinear(int index) const override;
+    int getBodyDegreesOfFreedom() const override;
+    void createCheckpoint(OpenMM::ContextImpl& context, std::ostream& stream) const override;
+    void loadCheckpoint(OpenMM::ContextImpl& context, std::istream& stream) override;
+    void discardRefusedCheckpoint(OpenMM::ContextImpl& context) override;
+    IntegratorParameterValues getIntegratorParameters(OpenMM::ContextImpl& context) override;
+    void setIntegratorParameters(OpenMM::ContextImpl& context, const IntegratorParameterValues& values) override;
+
+    /**
+     * A speed (nm/ps) no atom reaches in a simulation that is right (3% of light's): beyond
+     * it a kicked velocity counts as not finite, which is how the device sees a force that is
+     * not finite (OpenMM's fixed-point forces turn infinity into about 2e9 kJ/mol/nm).
+     */
+    static constexpr double LargestSpeed = 1e4;
+    /** Steps between lazy copies of the failure flag to the host. */
+    static constexpr int FlagCopyInterval = 16;
+    /**
+     * Host memory for the flag's asynchronous copy, the plugin's own (OpenMM overwrites its
+     * pinned buffer). Plain memory unless a platform sets its own: CUDA copies asynchronously
+     * only into page-locked memory. Each platform's plugin links its own copy of this class.
+     */
+    struct HostMemory {
+        void* (*allocate)(size_t bytes);
+        void (*release)(void* memory);
+    };
+    static void setHostMemory(const HostMemory& memory);
+
+    /** A device array of floats or doubles (perElement numbers each: 1, or 4 for real4 and mixed4) as doubles. */
+    static std::vector<double> downloadAsDouble(const OpenMM::ArrayInterface& array, int perElement = 1);
+    static void uploadFromDouble(OpenMM::ArrayInterface& array, const std::vector<double>& values, int perElement = 1);
+
+private:
+    class ReorderListener;
+    /** The phases queued for one launch of advanceGroups, in its order (Slot). */
+    enum class Slot { None, Scale, Kick, ProjectAfterKick, Drift, Noise, NoiseProjected, ProjectAtEnd };
+    struct Pass {
+        Slot last = Slot::None;
+        bool scaleVelocities = false, projectAfterKick = false, projectAtEnd = false, resetFollows = false;
+        double kickTime = 0, driftTime = 0, noiseDecay = 1, noiseScale = 0;
+    };
+    /** Start a new pass if this phase cannot follow the queued ones in advanceGroups' order. */
+    Pass& queue(Slot slot);
+    /** Launch the queued phases, if any. */
+    void flush();
+    /** One launch of advanceGroups; the step's first launch also backs up the state. */
+    void launchPass(const Pass& pass);
+    /** The backup of the step's state if no launch of this step has made it yet (before an integrator's kernel). */
+    void requireBackup();
+    /** RATTLE's velocity step outside a step (velocities set from the host, collisions). */
+    void projectNow(double tolerance, bool onlyIfNotRigid);
+    /** Device atom indices of the bodies' atoms and the constraints' ends, after a reorder. */
+    void mapAtoms();
+    void setKernelArguments();
+    /** BODY_ARGUMENTS of the device code. */
+    void addBodyArguments(Arguments& arguments);
+    /** BACKUP_ARGUMENTS of the device code; returns the index of backupStepIndex. */
+    int addBackupArguments(Arguments& arguments);
+    /** 0 for general bodies, ...: the device's code of a shape (SHAPE_* in the device code). */
+    static int shapeCode(RigidBodyMath::Shape shape);
+    /** Whether steps rebuild bodies from their reference geometry (single and mixed precision, against round-off drift). */
+    bool rebuildsShapes() const {
+        return !cc.getUseDoublePrecision();
+    }
+    void setReference(const std::vector<OpenMM::Vec3>& positions);
+    std::vector<double> identityOrientations() const;
+    double storageError(OpenMM::ContextImpl& context, const std::vector<OpenMM::Vec3>& positions) const;
+    bool doubleMixed() const {
+        return cc.getUseDoublePrecision() || cc.getUseMixedPrecision();
+    }
+
+    // Failures (CommonRigidBodyFailure.cpp).
+    void initializeFailure();
+    /** A step begins: its index since the last check, which its kernels record in the flag if they fail. */
+    int stepStarted(double stepSize);
+    /** What a failing kernel records: the index of the step begun last. */
+    int failureStepIndex() const {
+        return unchecked > 0 ? unchecked - 1 : 0;
+    }
+    /** Every FlagCopyInterval-th step: read the last copy of the flag, queue a new one. */
+    void stepQueued();
+    /** The blocking check: put the state back and throw if a step failed. */
+    void synchronize();
+    void atomsReordered();
+    void rememberOrder();
+    void resetFailure();
+    void restore(int failedStep);
+    void restoreAcrossReorder();
+    void restoreClock(int failedStep);
+    std::string failureMessage(long long failedStepCount) const;
+    void checked();
+
+    OpenMM::ComputeContext& cc;
+    const std::string integratorName;
+    RigidBodyTopology bodies;
+    // System atom indices: body-major, cluster-major (constraint ends; each atom once), the rest.
+    std::vector<int> systemBodyAtoms, systemConstraintAtoms, systemClusterAtoms, systemFreeAtoms;
+    std::vector<RigidBodyMath::Shape> shapes;
+    std::vector<double> inverseMasses;
+    std::unique_ptr<BodyShapeConstraints> shapeConstraints;
+    int numBodies = 0, numClusters = 0, numFree = 0;
+    double tolerance = 1e-5;
+    bool hasAndersen = false, hasRandomNumbers = false, argumentsSet = false;
+    /** Set by OpenMM's reorder of atoms: the force buffer then belongs to the old order. */
+    bool reordered = false;
+    /** Set by a checkpoint's load: the positions OpenMM reads next come with the reference geometry it held. */
+    bool keepReference = false;
+    /** Set while updateShapes() writes corrected positions (the Context notifies the integrator again). */
+    bool writingCorrectedShapes = false;
+    Pass pending;
+    /** The step's index for the flag until its first launch has backed up the state, then -1. */
+    int backupStepIndex = -1;
+
+    OpenMM::ComputeProgram stepProgram;
+    OpenMM::ComputeArray bodyStart, bodyAtoms, bodyShape, clusterStart, constraintAtoms, constraintDistance;
+    OpenMM::ComputeArray clusterAtomStart, clusterAtoms, freeAtoms;
+    /** Each body atom about its body's centre of mass when positions were set: the shape rebuilt every step. */
+    OpenMM::ComputeArray bodyReference;
+    /** Each body's orientation (9 numbers, row-major) turning its reference geometry into its shape now. */
+    OpenMM::ComputeArray bodyOrientation;
+    OpenMM::ComputeArray velocityScale;
+    /** sumKineticEnergy's partial sums (2 per work group) and their count. */
+    OpenMM::ComputeArray partials, partialCount;
+    /** The bodies' kinetic energies (3 per body), computeKineticEnergies' program compiled at its first call. */
+    OpenMM::ComputeArray bodyEnergies;
+    OpenMM::ComputeKernel advanceGroups, projectBodies, constrainFreeVelocities, collideBodies, partialSums,
+        bodyKineticEnergy;
+    int advanceBackupIndex, advanceKickTime, advanceProjectAfterKick, advanceDriftTime, advanceTolerance,
+        advanceNoiseDecay, advanceNoiseScale, advanceRandomIndex, advanceProjectAtEnd, advanceResetFollows,
+        advanceStepIndex, advanceScaleVelocities, projectOnlyIfNotRigid, freeVelocitiesTolerance,
+        freeVelocitiesStepIndex, collideKT, collideRandomIndex, sumsBackupIndex, sumsRandomIndex, sumsGaussians;
+
+    // The integrator's declared arrays, one device array (integratorArrays) and its backup.
+    struct DeclaredArray {
+        std::string name;
+        int offset, size;
+    };
+    std::vector<DeclaredArray> declared;
+    /** The declared arrays by name, from the device. */
+    IntegratorParameterValues integratorValues() const;
+    int integratorSize = 0;
+    CheckpointWriter writeIntegratorCheckpoint;
+    CheckpointReader readIntegratorCheckpoint;
+    OpenMM::ComputeArray integratorArrays, integratorBackup;
+
+    // The failure flag and the step's backup (CommonRigidBodyFailure.cpp).
+    struct BoxAtStep {
+        int step;
+        OpenMM::Vec3 box[3];
+    };
+    OpenMM::ComputeArray failure;
+    OpenMM::ComputeArray posqBackup, correctionBackup, velmBackup;
+    OpenMM::ComputeEvent flagCopied;
+    /** The flag's last asynchronous copy (HostMemory), read once the event has passed. */
+    int* flagCopy = nullptr;
+    bool copyQueued = false;
+    bool copyEnqueued = false;
+    int stepsSinceCopy = 0;
+    /** Steps since the last check, their step size, and the step count and time at it. */
+    int unchecked = 0;
+    double stepSize = 0, timeAtCheck = 0;
+    long long stepCountAtCheck = 0;
+    /** The box at each change since the last check (a barostat acts in a step's updateContextState). */
+    std::vector<BoxAtStep> boxes;
+    /** The device order and cell offsets the backups are in. */
+    std::vector<int> backupOrder;
+    std::vector<OpenMM::mm_int4> backupCellOffsets;
+    /** A failure found at a reordering, where nothing may throw: thrown by the next check. */
+    std::string deferred;
+    /** Test hook (MRATTLE_TEST_FAIL_AT_STEP, read at initialize): the step beginning at this count fails first; -1: none. */
+    long long testFailAtStep = -1;
+};
+
+/** A device kernel's arguments in the order of its signature; each add returns the argument's index. */
+class CommonRigidBodyState::Arguments {
+public:
+    Arguments(OpenMM::ComputeKernel& kernel, bool doubleMixed) : kernel(kernel), doubleMixed(doubleMixed) {
+    }
+    template <class T>
+    int add(const T& value) {
+        kernel->addArg(value);
+        return count++;
+    }
+    int add(OpenMM::ArrayInterface& array) {
+        kernel->addArg(array);
+        return count++;
+    }
+    int add(OpenMM::ComputeArray& array) {
+        kernel->addArg(array);
+        return count++;
+    }
+    /** A number in the integration arithmetic's precision ('mixed'). */
+    int addMixed(double value) {
+        if (doubleMixed)
+            kernel->addArg(value);
+        else
+            kernel->addArg((float) value);
+        return count++;
+    }
+
+private:
+    OpenMM::ComputeKernel& kernel;
+    bool doubleMixed;
+    int count = 0;
+};
+
+} // namespace MRattlePlugin
+
+#endif

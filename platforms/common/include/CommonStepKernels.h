@@ -1,0 +1,101 @@
+#ifndef MRATTLE_COMMON_STEP_KERNELS_H_
+#define MRATTLE_COMMON_STEP_KERNELS_H_
+
+#include "CommonRigidBodyState.h"
+#include "internal/RigidBodyKernels.h"
+
+namespace MRattlePlugin {
+
+/**
+ * The integrators' step kernels on the common compute platforms: each is initialize() and an
+ * execute() that lists its phases on the state, as on Reference. Failures are reported by the
+ * class name IntegratorNames gives for the kernel's name.
+ */
+class CommonStepKernel : public RigidBodyStepKernel {
+public:
+    CommonStepKernel(const std::string& name, const OpenMM::Platform& platform, OpenMM::ComputeContext& cc)
+        : RigidBodyStepKernel(name, platform), state(cc, IntegratorNames::ofStepKernel(name).integrator) {
+    }
+    RigidBodyState& getState() override {
+        return state;
+    }
+
+protected:
+    CommonRigidBodyState state;
+};
+
+/** MRattleIntegrator: velocity Verlet with M-RATTLE's resets; two launches a step. */
+class CommonIntegrateMRattleStepKernel : public CommonStepKernel {
+public:
+    using CommonStepKernel::CommonStepKernel;
+    void initialize(const OpenMM::System& system, const RigidBodyTopology& topology,
+                    const RigidBodyIntegrator& integrator) override;
+    void execute(OpenMM::ContextImpl& context, const RigidBodyIntegrator& integrator, bool& forcesAreValid) override;
+};
+
+/**
+ * MRattleLangevinIntegrator: LangevinMiddle's splitting with each drift reset by M-RATTLE and
+ * the velocities projected after the kick and after the noise (OpenMM's device random
+ * numbers, which its checkpoints hold); two launches a step.
+ */
+class CommonIntegrateMRattleLangevinStepKernel : public CommonStepKernel {
+public:
+    using CommonStepKernel::CommonStepKernel;
+    void initialize(const OpenMM::System& system, const RigidBodyTopology& topology,
+                    const RigidBodyIntegrator& integrator) override;
+    void execute(OpenMM::ContextImpl& context, const RigidBodyIntegrator& integrator, bool& forcesAreValid) override;
+};
+
+/**
+ * Velocity Verlet with M-RATTLE between two half steps of a thermostat that scales every
+ * velocity by one factor, which its own kernel computes on the device from the state's
+ * kinetic energy sums (kernels/thermostats.cc); seven launches a step when coupled.
+ */
+class CommonThermostatStepKernel : public CommonStepKernel {
+public:
+    using CommonStepKernel::CommonStepKernel;
+    void execute(OpenMM::ContextImpl& context, const RigidBodyIntegrator& integrator, bool& forcesAreValid) override;
+
+protected:
+    virtual double collisionFrequency(const RigidBodyIntegrator& integrator) const = 0;
+    /** The factor for every velocity into the state's velocity scale (sumKineticEnergy, then the thermostat's kernel). */
+    virtual void halfStep(const RigidBodyIntegrator& integrator) = 0;
+    OpenMM::ComputeKernel kernel;
+};
+
+/** MRattleNoseHooverIntegrator: the chain lives on the device, declared to the state. */
+class CommonIntegrateMRattleNoseHooverStepKernel : public CommonThermostatStepKernel {
+public:
+    using CommonThermostatStepKernel::CommonThermostatStepKernel;
+    void initialize(const OpenMM::System& system, const RigidBodyTopology& topology,
+                    const RigidBodyIntegrator& integrator) override;
+    double computeHeatBathEnergy(OpenMM::ContextImpl& context, const RigidBodyIntegrator& integrator) override;
+
+protected:
+    double collisionFrequency(const RigidBodyIntegrator& integrator) const override;
+    void halfStep(const RigidBodyIntegrator& integrator) override;
+
+private:
+    OpenMM::ComputeArray weights;
+    int argumentDof, argumentKT, argumentFrequency, argumentHalfStep;
+};
+
+/** MRattleBussiIntegrator: OpenMM's device Gaussian numbers; the work lives on the device, declared to the state. */
+class CommonIntegrateMRattleBussiStepKernel : public CommonThermostatStepKernel {
+public:
+    using CommonThermostatStepKernel::CommonThermostatStepKernel;
+    void initialize(const OpenMM::System& system, const RigidBodyTopology& topology,
+                    const RigidBodyIntegrator& integrator) override;
+    double computeHeatBathEnergy(OpenMM::ContextImpl& context, const RigidBodyIntegrator& integrator) override;
+
+protected:
+    double collisionFrequency(const RigidBodyIntegrator& integrator) const override;
+    void halfStep(const RigidBodyIntegrator& integrator) override;
+
+private:
+    int argumentRandomIndex, argumentDof, argumentKT, argumentC;
+};
+
+} // namespace MRattlePlugin
+
+#endif
