@@ -186,7 +186,7 @@ private:
     /** BODY_ARGUMENTS of the device code. */
     void addBodyArguments(Arguments& arguments);
     /** BACKUP_ARGUMENTS of the device code; returns the index of backupStepIndex. */
-    int addBackupArguments(Arguments& arguments);
+    int addBackupArrays(Arguments& arguments);
     /** 0 for general bodies, ...: the device's code of a shape (SHAPE_* in the device code). */
     static int shapeCode(RigidBodyMath::Shape shape);
     /** Whether steps rebuild bodies from their reference geometry (single and mixed precision, against round-off drift). */

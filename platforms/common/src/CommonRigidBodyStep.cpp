@@ -105,7 +105,7 @@ void CommonRigidBodyState::addBodyArguments(Arguments& arguments) {
     arguments.add(cc.getVelm());
 }
 
-int CommonRigidBodyState::addBackupArguments(Arguments& arguments) {
+int CommonRigidBodyState::addBackupArrays(Arguments& arguments) {
     arguments.add(posqBackup);
     arguments.add(cc.getUseMixedPrecision() ? correctionBackup : posqBackup);
     arguments.add(velmBackup);
@@ -136,7 +136,7 @@ void CommonRigidBodyState::setKernelArguments() {
     advance.add(cc.getLongForceBuffer());
     advance.add(cc.getPaddedNumAtoms());
     advance.add(integration.getPosDelta());
-    advanceBackupIndex = addBackupArguments(advance);
+    advanceBackupIndex = addBackupArrays(advance);
     advanceKickTime = advance.addMixed(0.0);
     advanceProjectAfterKick = advance.add(0);
     advanceDriftTime = advance.addMixed(0.0);
@@ -178,7 +178,7 @@ void CommonRigidBodyState::setKernelArguments() {
     sumsGaussians = sums.add(0);
     sums.add(partials);
     sums.add(partialCount);
-    sumsBackupIndex = addBackupArguments(sums);
+    sumsBackupIndex = addBackupArrays(sums);
     sums.add(failure);
 
     if (hasAndersen) {

@@ -1,26 +1,11 @@
 /*
- * advanceGroups: the phases of a step fused into one launch, one work item per group of
- * atoms that moves together: a rigid body, a cluster of free constraints, or a free atom
- * (massless ones included, for the backup). Work items 0..numBodies-1 take the bodies,
- * then the clusters, then the free atoms. Each phase is done if asked for, in this order:
- *
- *   backup of the atoms and the integrator's arrays (backupStepIndex >= 0: the step's first
- *   launch), scaling of the velocities by velocityScale[0] (scaleVelocities), kick (kickTime != 0),
- *   projection (projectAfterKick), drift and reset (driftTime != 0: M-RATTLE's reset for a
- *   body, SHAKE for a cluster, a drift for a free atom), Langevin friction and noise and a
- *   projection (noiseDecay != 1; at zero temperature noiseScale is 0), projection (projectAtEnd).
- *
- * A body's reset reads of its velocities only its momentum and angular momentum, which its
- * projection keeps: so a body is not projected right before a reset, that of this pass's
- * drift (after the kick) or that of the next pass (after the noise, when resetFollows). Its
- * reset is the same to round-off, for a projection's work less.
- *
- * A group's phases read and write only its own atoms, so no phase waits for another group.
- * A failure of any group sets failure[0] to 1 + stepIndex; the host puts back the backup
- * (CommonRigidBodyFailure.cpp). A work item that finds its own step failed when the pass is the
- * step's backup still backs up its groups (and does nothing else), so the backup is of one time.
- *
- * (See bodyMath.cc for the program's layout and the failure flag.)
+ * advanceGroups: a step's queued phases in one launch, one work item per group of atoms that
+ * moves together (a body, a cluster of free constraints, a free atom). Each phase if asked
+ * for, in this order: backup (the step's first launch), scaling by velocityScale[0], kick,
+ * projection, drift and reset (M-RATTLE for a body, SHAKE for a cluster), Langevin noise and
+ * projection, projection. A group touches only its own atoms, so no phase waits for another.
+ * A body is not projected right before a reset (this pass's, or the next one's when
+ * resetFollows): the reset reads only its momenta, which the projection keeps.
  */
 
 /** Group kinds. */

@@ -31,13 +31,7 @@
         GLOBAL mixed4* RESTRICT velmBackup, GLOBAL const mixed* RESTRICT integratorArrays, \
         GLOBAL mixed* RESTRICT integratorBackup, int integratorSize, int backupStepIndex
 
-/*
- * A body's shape, as the host classifies it when positions are set (bodyShape[body]):
- * SHAPE_GENERAL, SHAPE_LINEAR or SHAPE_POINT (only translates: no rotation is solved or
- * kept), defined by the host from RigidBodyMath::Shape. FINITE_BOUND, also the host's: a
- * squared velocity, a squared centre or a rotation vector's length beyond it counts as not
- * finite (NaN fails every comparison).
- */
+/* SHAPE_* (bodyShape[body]), FINITE_BOUND and the other constants are the host's, as defines. */
 
 /* Every helper is inlined: pocl (OpenCL on a CPU) would pass 3x3 matrices through the stack. */
 #if defined(__OPENCL_VERSION__) && defined(__clang__)

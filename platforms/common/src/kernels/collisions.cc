@@ -4,8 +4,6 @@
  * Maxwell-Boltzmann velocities for all its atoms, which the projection then makes rigid
  * (projecting a body of which only some atoms are fresh does not keep the rigid-body
  * Boltzmann distribution). Compiled only for a System with an AndersenThermostat.
- *
- * (See bodyMath.cc for the program's layout and the failure flag.)
  */
 KERNEL void collideBodies(BODY_ARGUMENTS, mixed kT, GLOBAL const float4* RESTRICT random, unsigned int randomIndex,
         GLOBAL const int* RESTRICT failure) {

@@ -3,8 +3,6 @@
  * connected group, e.g. the bonds to hydrogens of one heavy atom): SHAKE's position
  * iterations and the velocity step. A cluster lists its constraints (clusterStart into
  * constraintAtoms) and, once each, its atoms.
- *
- * (See bodyMath.cc for the program's layout and the failure flag.)
  */
 
 /**

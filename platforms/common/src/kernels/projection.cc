@@ -1,8 +1,6 @@
 /*
  * RATTLE's velocity step for rigid bodies: the mass-weighted projection onto rigid-body
  * motion, one work item per body.
- *
- * (See bodyMath.cc for the program's layout and the failure flag.)
  */
 
 /** A body's rigid-body motion: its centre (relative to its first atom, origin), V and w. */

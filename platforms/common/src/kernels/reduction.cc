@@ -3,8 +3,6 @@
  * kineticEnergyPartialSums leaves one partial sum per work group, and an integrator's kernel
  * of one work group of REDUCTION_THREADS adds them up (addPartialSums) and acts on the total
  * (the thermostats, thermostats.cc).
- *
- * (See bodyMath.cc for the program's layout and the failure flag.)
  */
 
 /** Sum two arrays of the work group (one value per work item) into their first elements. */

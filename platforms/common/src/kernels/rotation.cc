@@ -1,7 +1,5 @@
 /*
  * M-RATTLE's position reset rotation: the torque condition's Newton solve, and its closed form for linear bodies.
- *
- * (See bodyMath.cc for the program's layout and the failure flag.)
  */
 
 /**

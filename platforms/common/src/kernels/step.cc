@@ -2,8 +2,6 @@
  * A step's work on single atoms and on one body: its backup, kicks, drifts, the bodies'
  * position reset, Langevin's noise. The kernel that sequences them per group of atoms is
  * advanceGroups (advance.cc).
- *
- * (See bodyMath.cc for the program's layout and the failure flag.)
  */
 
 /** Write a position in the storage's precision (mixed: a float and its correction). */

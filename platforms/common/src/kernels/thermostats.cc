@@ -5,8 +5,6 @@
  * partial sums and turns them into the factor (velocityScale[0]), then the state's
  * scaleVelocities phase. The maths is RigidBodyThermostats' (openmmapi), which the tests
  * hold it to. The chain and the work are declared arrays: the state backs them up.
- *
- * (See bodyMath.cc for the program's layout and the failure flag.)
  */
 
 /**
