@@ -295,9 +295,9 @@ double RigidBodySearch::maxFreeConstraintError(const vector<Vec3>& positions) co
         double distance;
         system.getConstraintParameters(c, p1, p2, distance);
         const Vec3 delta = positions[p2] - positions[p1];
-        // In nm, as OpenMM 7.7's LocalEnergyMinimizer (OpenMM 8 divides by the length: 10x stricter
-        // for bonds to hydrogen, and measured 3.4x the iterations on test.pdb). Only the number of
-        // spring-stiffening rounds depends on it: applyConstraints makes the constraints exact at the end.
+        // In nm, as OpenMM 7.7's LocalEnergyMinimizer (OpenMM 8's relative error is 10x stricter for
+        // bonds to hydrogen, for more iterations). Only the number of spring-stiffening rounds
+        // depends on it: applyConstraints makes the constraints exact at the end.
         maxError = std::max(maxError, std::fabs(std::sqrt(delta.dot(delta)) - distance));
     }
     return maxError;

@@ -196,6 +196,11 @@ static std::vector<PluginIntegratorCast> pluginIntegratorCasts;
 #: Every integrator class wrapped here, in the order of their MRATTLE_INTEGRATOR lines (each
 #: line appends its class): the package imports and exports them from this list.
 INTEGRATOR_CLASSES = []
+
+
+def _inUnit(value, inUnit):
+    """A number in the unit the C++ API takes: a Quantity converted, a plain number as it is."""
+    return value.value_in_unit(inUnit) if unit.is_quantity(value) else value
 %}
 %define MRATTLE_INTEGRATOR(CLASS)
 %{
@@ -209,8 +214,7 @@ static PyObject* pluginIntegratorAs##CLASS(OpenMM::Integrator* integrator) {
     pluginIntegratorCasts.push_back(pluginIntegratorAs##CLASS);
 %}
 %feature("pythonprepend") MRattlePlugin::CLASS::CLASS %{
-    if unit.is_quantity(stepSize):
-        stepSize = stepSize.value_in_unit(unit.picosecond)
+    stepSize = _inUnit(stepSize, unit.picosecond)
 %}
 %include "CLASS.h"
 %pythoncode %{
@@ -218,95 +222,63 @@ INTEGRATOR_CLASSES.append(CLASS)
 %}
 %enddef
 
-MRATTLE_INTEGRATOR(MRattleIntegrator)
-MRATTLE_INTEGRATOR(RigidSplittingIntegrator)
-
-/* The Langevin integrator: temperature, friction and step size with units, as OpenMM's LangevinMiddleIntegrator. */
+/*
+ * Units as OpenMM's LangevinMiddleIntegrator and NoseHooverIntegrator take them: a bath's
+ * temperature (K) and a coupling frequency (1/ps), set and got, for every class with them.
+ */
 %typemap(doctype) double temperature "float or Quantity (temperature)"
 %typemap(doctype) double frictionCoeff "float or Quantity (1/time)"
-%feature("pythonprepend") MRattlePlugin::MRattleLangevinIntegrator::MRattleLangevinIntegrator(double temperature,
-                                                                                          double frictionCoeff,
-                                                                                          double stepSize) %{
-    if unit.is_quantity(temperature):
-        temperature = temperature.value_in_unit(unit.kelvin)
-    if unit.is_quantity(frictionCoeff):
-        frictionCoeff = frictionCoeff.value_in_unit(unit.picosecond**-1)
-    if unit.is_quantity(stepSize):
-        stepSize = stepSize.value_in_unit(unit.picosecond)
-%}
-%feature("pythonprepend") MRattlePlugin::MRattleLangevinIntegrator::setTemperature %{
-    if unit.is_quantity(temperature):
-        temperature = temperature.value_in_unit(unit.kelvin)
-%}
-%feature("pythonprepend") MRattlePlugin::MRattleLangevinIntegrator::setFriction %{
-    if unit.is_quantity(coeff):
-        coeff = coeff.value_in_unit(unit.picosecond**-1)
-%}
-%feature("pythonappend") MRattlePlugin::MRattleLangevinIntegrator::getTemperature %{
-    val = val*unit.kelvin
-%}
-%feature("pythonappend") MRattlePlugin::MRattleLangevinIntegrator::getFriction %{
-    val = val/unit.picosecond
-%}
-MRATTLE_INTEGRATOR(MRattleLangevinIntegrator)
-
-/*
- * The thermostats (Nose-Hoover chain, CSVR): temperature, collision frequency and step size
- * with units, as OpenMM's NoseHooverIntegrator; the heat bath's energy in kJ/mol.
- */
 %typemap(doctype) double collisionFrequency "float or Quantity (1/time)"
-%define MRATTLE_THERMOSTAT_UNITS(CLASS)
+%define MRATTLE_BATH_UNITS(CLASS, SET_FREQUENCY, GET_FREQUENCY, FREQUENCY_ARGUMENT)
 %feature("pythonprepend") MRattlePlugin::CLASS::setTemperature %{
-    if unit.is_quantity(temperature):
-        temperature = temperature.value_in_unit(unit.kelvin)
-%}
-%feature("pythonprepend") MRattlePlugin::CLASS::setCollisionFrequency %{
-    if unit.is_quantity(frequency):
-        frequency = frequency.value_in_unit(unit.picosecond**-1)
+    temperature = _inUnit(temperature, unit.kelvin)
 %}
 %feature("pythonappend") MRattlePlugin::CLASS::getTemperature %{
     val = val*unit.kelvin
 %}
-%feature("pythonappend") MRattlePlugin::CLASS::getCollisionFrequency %{
+%feature("pythonprepend") MRattlePlugin::CLASS::SET_FREQUENCY %{
+    FREQUENCY_ARGUMENT = _inUnit(FREQUENCY_ARGUMENT, unit.picosecond**-1)
+%}
+%feature("pythonappend") MRattlePlugin::CLASS::GET_FREQUENCY %{
     val = val/unit.picosecond
 %}
+%enddef
+/* A constructor (temperature, frequency, step size, ...): per signature, so that it wins over MRATTLE_INTEGRATOR's. */
+%define MRATTLE_BATH_CONSTRUCTOR(CLASS, FREQUENCY_ARGUMENT, SIGNATURE)
+%feature("pythonprepend") MRattlePlugin::CLASS::CLASS SIGNATURE %{
+    temperature = _inUnit(temperature, unit.kelvin)
+    FREQUENCY_ARGUMENT = _inUnit(FREQUENCY_ARGUMENT, unit.picosecond**-1)
+    stepSize = _inUnit(stepSize, unit.picosecond)
+%}
+%enddef
+/* The thermostats' heat-bath energy, in kJ/mol. */
+%define MRATTLE_HEAT_BATH_UNITS(CLASS)
 %feature("pythonappend") MRattlePlugin::CLASS::computeHeatBathEnergy %{
     val = val*unit.kilojoules_per_mole
 %}
 %enddef
-MRATTLE_THERMOSTAT_UNITS(MRattleNoseHooverIntegrator)
-/*
- * Per signature, so that these win over MRATTLE_INTEGRATOR's: SWIG's Python constructor (one,
- * with the defaults) takes its prepend from the three-argument form.
- */
-%define MRATTLE_NOSE_HOOVER_CONSTRUCTOR(SIGNATURE)
-%feature("pythonprepend") MRattlePlugin::MRattleNoseHooverIntegrator::MRattleNoseHooverIntegrator SIGNATURE %{
-    if unit.is_quantity(temperature):
-        temperature = temperature.value_in_unit(unit.kelvin)
-    if unit.is_quantity(collisionFrequency):
-        collisionFrequency = collisionFrequency.value_in_unit(unit.picosecond**-1)
-    if unit.is_quantity(stepSize):
-        stepSize = stepSize.value_in_unit(unit.picosecond)
-%}
-%enddef
-MRATTLE_NOSE_HOOVER_CONSTRUCTOR((double temperature, double collisionFrequency, double stepSize))
-MRATTLE_NOSE_HOOVER_CONSTRUCTOR((double temperature, double collisionFrequency, double stepSize, int chainLength))
-MRATTLE_NOSE_HOOVER_CONSTRUCTOR((double temperature, double collisionFrequency, double stepSize, int chainLength, int numMTS))
-MRATTLE_NOSE_HOOVER_CONSTRUCTOR((double temperature, double collisionFrequency, double stepSize, int chainLength, int numMTS, int numYoshidaSuzuki))
+
+MRATTLE_INTEGRATOR(MRattleIntegrator)
+MRATTLE_INTEGRATOR(RigidSplittingIntegrator)
+
+MRATTLE_BATH_UNITS(MRattleLangevinIntegrator, setFriction, getFriction, coeff)
+MRATTLE_BATH_CONSTRUCTOR(MRattleLangevinIntegrator, frictionCoeff, (double temperature, double frictionCoeff, double stepSize))
+MRATTLE_INTEGRATOR(MRattleLangevinIntegrator)
+
+/* SWIG's Python constructor (one, with the defaults) takes its prepend from the three-argument form. */
+MRATTLE_BATH_UNITS(MRattleNoseHooverIntegrator, setCollisionFrequency, getCollisionFrequency, frequency)
+MRATTLE_HEAT_BATH_UNITS(MRattleNoseHooverIntegrator)
+MRATTLE_BATH_CONSTRUCTOR(MRattleNoseHooverIntegrator, collisionFrequency, (double temperature, double collisionFrequency, double stepSize))
+MRATTLE_BATH_CONSTRUCTOR(MRattleNoseHooverIntegrator, collisionFrequency, (double temperature, double collisionFrequency, double stepSize, int chainLength))
+MRATTLE_BATH_CONSTRUCTOR(MRattleNoseHooverIntegrator, collisionFrequency, (double temperature, double collisionFrequency, double stepSize, int chainLength, int numMTS))
+MRATTLE_BATH_CONSTRUCTOR(MRattleNoseHooverIntegrator, collisionFrequency, (double temperature, double collisionFrequency, double stepSize, int chainLength, int numMTS, int numYoshidaSuzuki))
 MRATTLE_INTEGRATOR(MRattleNoseHooverIntegrator)
-MRATTLE_THERMOSTAT_UNITS(MRattleBussiIntegrator)
-%feature("pythonprepend") MRattlePlugin::MRattleBussiIntegrator::MRattleBussiIntegrator(
-    double temperature, double collisionFrequency, double stepSize) %{
-    if unit.is_quantity(temperature):
-        temperature = temperature.value_in_unit(unit.kelvin)
-    if unit.is_quantity(collisionFrequency):
-        collisionFrequency = collisionFrequency.value_in_unit(unit.picosecond**-1)
-    if unit.is_quantity(stepSize):
-        stepSize = stepSize.value_in_unit(unit.picosecond)
-%}
+
+MRATTLE_BATH_UNITS(MRattleBussiIntegrator, setCollisionFrequency, getCollisionFrequency, frequency)
+MRATTLE_HEAT_BATH_UNITS(MRattleBussiIntegrator)
+MRATTLE_BATH_CONSTRUCTOR(MRattleBussiIntegrator, collisionFrequency, (double temperature, double collisionFrequency, double stepSize))
 %feature("pythonprepend") MRattlePlugin::MRattleBussiIntegrator::setTimeConstant %{
-    if unit.is_quantity(tau):
-        tau = tau.value_in_unit(unit.picosecond)
+    tau = _inUnit(tau, unit.picosecond)
 %}
 %feature("pythonappend") MRattlePlugin::MRattleBussiIntegrator::getTimeConstant %{
     val = val*unit.picosecond

@@ -17,8 +17,7 @@ namespace MRattlePlugin {
  * T's own settings, then the shared ones (RigidBodyIntegratorSerialization); it reads
  * them back in the same order. An integrator whose only constructor argument is the step
  * size needs nothing more; one with settings of its own specializes writeOwnSettings()
- * and create() in its own proxy header and source (as MRattleLangevinIntegratorProxy.h and
- * .cpp do); the registration includes that header.
+ * and create() in MRattleSerializationProxyRegistration.cpp, before the registration.
  */
 template <class T>
 class RigidBodyIntegratorProxy : public OpenMM::SerializationProxy {

@@ -48,9 +48,8 @@ public:
     static constexpr double Tolerance = 1e-6;
     /**
      * What rounding each stored coordinate by storageError can do to a distance: both ends,
-     * three coordinates each (2 sqrt(3)), times 8 to spare: OpenCL's single and mixed
-     * storage was measured to leave TIP3P waters of a 3 nm box 1.6e-6 and 2.6e-6 nm off
-     * their geometry, about 4x a float's rounding there.
+     * three coordinates each (2 sqrt(3)), times 8 to spare (single precision leaves waters
+     * about 4x a float's rounding off their geometry).
      */
     static constexpr double StorageErrorFactor = 16 * 1.7320508075688772;
 

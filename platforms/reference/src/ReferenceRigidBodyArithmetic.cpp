@@ -1,13 +1,10 @@
-#include "ReferenceRigidBodyOperations.h"
-#include "internal/ThermalVelocities.h"
-#include "openmm/AndersenThermostat.h"
+#include "ReferenceRigidBodyState.h"
+#include "mrattle/RigidBodyRotor.h"
 #include "openmm/OpenMMException.h"
 #include "openmm/reference/SimTKOpenMMRealType.h"
 #include <algorithm>
 #include <cmath>
-#include <cstdint>
-#include <istream>
-#include <sstream>
+#include <climits>
 #include <string>
 
 using namespace MRattlePlugin;
@@ -22,71 +19,19 @@ namespace {
  */
 const double ConstraintCheckSlack = 2;
 
-/**
- * A checkpoint of format 3 framed this kernel's state again, with its length (int32,
- * native-endian) before the text: skip that frame if the stream starts with one. The text
- * of a random state starts with a digit, so its first four bytes read as a length are at
- * least 0x30303030: never the length of the rest, which is how a frame is told apart.
- */
-void skipFormat3Frame(std::istream& stream) {
-    const std::streampos start = stream.tellg();
-    stream.seekg(0, std::ios::end);
-    const std::streamoff rest = stream.tellg() - start;
-    stream.seekg(start);
-    int32_t length = -1;
-    if (rest >= (std::streamoff) sizeof(length))
-        stream.read(reinterpret_cast<char*>(&length), sizeof(length));
-    if (!(length >= 0 && length == rest - (std::streamoff) sizeof(length)))
-        stream.seekg(start);
+/** Raw 3N-double view of a Vec3 array, for the numerical core. */
+double* coordinates(vector<Vec3>& v) {
+    static_assert(sizeof(Vec3) == 3 * sizeof(double), "Vec3 must be three packed doubles");
+    return reinterpret_cast<double*>(v.data());
+}
+
+const double* coordinates(const vector<Vec3>& v) {
+    return reinterpret_cast<const double*>(v.data());
 }
 
 } // namespace
 
-ReferenceRigidBodyOperations::ReferenceRigidBodyOperations(const System& system, const RigidBodyTopology& topology)
-    : bodies(topology) {
-    const int n = system.getNumParticles();
-    inverseMass.resize(n);
-    for (int i = 0; i < n; i++) {
-        double mass = system.getParticleMass(i);
-        inverseMass[i] = (mass == 0.0 ? 0.0 : 1.0 / mass);
-    }
-    shapes.assign(bodies.getNumBodies(), RigidBodyMath::Shape::General);
-    for (int b = 0; b < bodies.getNumBodies(); b++) {
-        const vector<int>& atoms = bodies.getBodyParticles(b);
-        views.push_back(RigidBodyMath::BodyView{atoms.data(), (int) atoms.size(), bodies.getMasses().data(),
-                                                bodies.getBodyMass(b), false});
-    }
-    vector<bool> free(n, false);
-    for (int i : bodies.getFreeParticles())
-        free[i] = true;
-    for (int i = 0; i < n; i++)
-        if (bodies.getBodyOfParticle(i) < 0 && !free[i])
-            otherParticles.push_back(i);
-    if (!bodies.getFreeConstraints().empty()) {
-        // OpenMM's constraint code (CCMA, SETTLE for rigid water) on the free constraints only.
-        System freeSystem;
-        for (int i = 0; i < n; i++)
-            freeSystem.addParticle(system.getParticleMass(i));
-        for (int c : bodies.getFreeConstraints()) {
-            int p1, p2;
-            double distance;
-            system.getConstraintParameters(c, p1, p2, distance);
-            freeSystem.addConstraint(p1, p2, distance);
-            freeConstraintAtoms.push_back({p1, p2});
-            freeConstraintDistances.push_back(distance);
-        }
-        freeConstraints.reset(new ReferenceConstraints(freeSystem));
-    }
-    for (int f = 0; f < system.getNumForces(); f++)
-        if (const AndersenThermostat* thermostat = dynamic_cast<const AndersenThermostat*>(&system.getForce(f))) {
-            andersen = true;
-            int seed = thermostat->getRandomNumberSeed();
-            collisionRandom.seed(seed != 0 ? (uint64_t) seed : (uint64_t) std::random_device()());
-            randomIsSet = true;
-        }
-}
-
-RigidBodyMath::Kick ReferenceRigidBodyOperations::kickOf(const vector<Vec3>* forces, double time) const {
+RigidBodyMath::Kick ReferenceRigidBodyState::kickOf(const vector<Vec3>* forces, double time) const {
     RigidBodyMath::Kick kick;
     if (forces != nullptr) {
         kick.forces = coordinates(*forces);
@@ -96,7 +41,7 @@ RigidBodyMath::Kick ReferenceRigidBodyOperations::kickOf(const vector<Vec3>* for
     return kick;
 }
 
-void ReferenceRigidBodyOperations::setThreads(int count) {
+void ReferenceRigidBodyState::setThreads(int count) {
     numThreads = std::max(count, 1);
     if (numThreads > 1)
         helpers.reset(new ThreadPool(numThreads - 1));
@@ -104,11 +49,9 @@ void ReferenceRigidBodyOperations::setThreads(int count) {
         helpers.reset();
 }
 
-void ReferenceRigidBodyOperations::forEachThread(const std::function<void(int)>& work) {
-    // The calling thread takes a share instead of sleeping until the helpers finish. Waking
-    // all the workers of a pool at once lets the scheduler put two of them on the one idle
-    // core while the caller's core then idles (measured: 2 threads no faster than 1 on 2
-    // cores); a caller that keeps working keeps its core busy.
+void ReferenceRigidBodyState::forEachThread(const std::function<void(int)>& work) {
+    // The calling thread takes a share instead of sleeping until the helpers finish: a caller
+    // that keeps working keeps its core busy, where waking every worker can leave it idle.
     helpers->execute([&](ThreadPool&, int thread) { work(thread); });
     try {
         work(numThreads - 1);
@@ -119,7 +62,7 @@ void ReferenceRigidBodyOperations::forEachThread(const std::function<void(int)>&
     helpers->waitForThreads();
 }
 
-int ReferenceRigidBodyOperations::forEachBody(const std::function<bool(int)>& work) {
+int ReferenceRigidBodyState::forEachBody(const std::function<bool(int)>& work) {
     return forEachBodyRangeAndFreeParticle(
         [&](int begin, int end) {
             for (int b = begin; b < end; b++)
@@ -130,7 +73,7 @@ int ReferenceRigidBodyOperations::forEachBody(const std::function<bool(int)>& wo
         nullptr);
 }
 
-int ReferenceRigidBodyOperations::forEachBodyRangeAndFreeParticle(const std::function<int(int, int)>& work,
+int ReferenceRigidBodyState::forEachBodyRangeAndFreeParticle(const std::function<int(int, int)>& work,
                                                                 const std::function<void(int, int)>& freeWork) {
     const int numBodies = bodies.getNumBodies();
     const int numFree = bodies.getFreeParticles().size();
@@ -150,7 +93,7 @@ int ReferenceRigidBodyOperations::forEachBodyRangeAndFreeParticle(const std::fun
     return *std::min_element(firstFailure.begin(), firstFailure.end());
 }
 
-void ReferenceRigidBodyOperations::forEachParticleRange(const std::function<void(int, int)>& work) {
+void ReferenceRigidBodyState::forEachParticleRange(const std::function<void(int, int)>& work) {
     const int numParticles = inverseMass.size();
     // A particle costs nanoseconds: only large systems pay for a parallel region.
     if (numThreads == 1 || numParticles < 4096) {
@@ -162,27 +105,9 @@ void ReferenceRigidBodyOperations::forEachParticleRange(const std::function<void
     });
 }
 
-void ReferenceRigidBodyOperations::updateShapes(const vector<Vec3>& positions) {
-    shapes = bodies.classifyShapes(positions);
-    // A point rotates no more than a line does: both take the linear body's arithmetic.
-    for (int b = 0; b < bodies.getNumBodies(); b++)
-        views[b].linear = (shapes[b] != RigidBodyMath::Shape::General);
-}
-
-int ReferenceRigidBodyOperations::getBodyDegreesOfFreedom() const {
-    return RigidBodyTopology::getBodyDegreesOfFreedom(shapes);
-}
-
-void ReferenceRigidBodyOperations::seedRandom(int seed) {
-    if (randomIsSet)
-        return;
-    collisionRandom.seed(seed != 0 ? (uint64_t) seed : (uint64_t) std::random_device()());
-    randomIsSet = true;
-}
-
-void ReferenceRigidBodyOperations::driftAndReset(vector<Vec3>& x, const vector<Vec3>& v, double h, double tolerance,
-                                               vector<Vec3>& newPositions, vector<Vec3>& newVelocities,
-                                               const vector<Vec3>* forces, double kickTime) {
+void ReferenceRigidBodyState::driftAndResetArrays(vector<Vec3>& x, const vector<Vec3>& v, double h, double tolerance,
+                                                  vector<Vec3>& newPositions, vector<Vec3>& newVelocities,
+                                                  const vector<Vec3>* forces, double kickTime) {
     // A free particle's velocity after the kick (if forces are given; free particles are massive).
     auto kicked = [&](int i) { return forces != nullptr ? v[i] + (*forces)[i] * (kickTime * inverseMass[i]) : v[i]; };
     for (int i : otherParticles) {   // massless: they do not move by themselves
@@ -227,7 +152,7 @@ void ReferenceRigidBodyOperations::driftAndReset(vector<Vec3>& x, const vector<V
                               " Newton iterations; the step size is too large for the forces, or they are not finite");
 }
 
-void ReferenceRigidBodyOperations::constrainFreePositions(vector<Vec3>& oldPositions, vector<Vec3>& newPositions,
+void ReferenceRigidBodyState::constrainFreePositions(vector<Vec3>& oldPositions, vector<Vec3>& newPositions,
                                                         double tolerance) {
     if (!freeConstraints)
         return;
@@ -244,7 +169,7 @@ void ReferenceRigidBodyOperations::constrainFreePositions(vector<Vec3>& oldPosit
     }
 }
 
-void ReferenceRigidBodyOperations::constrainFreeVelocities(vector<Vec3>& positions, vector<Vec3>& velocities,
+void ReferenceRigidBodyState::constrainFreeVelocities(vector<Vec3>& positions, vector<Vec3>& velocities,
                                                          double tolerance) {
     if (!freeConstraints)
         return;
@@ -261,42 +186,42 @@ void ReferenceRigidBodyOperations::constrainFreeVelocities(vector<Vec3>& positio
     }
 }
 
-void ReferenceRigidBodyOperations::projectVelocities(vector<Vec3>& positions, vector<Vec3>& velocities, double tolerance) {
+void ReferenceRigidBodyState::projectArrays(vector<Vec3>& positions, vector<Vec3>& velocities, double tolerance) {
     constrainFreeVelocities(positions, velocities, tolerance);
-    projectBodies(coordinates(positions), coordinates(velocities));
-}
-
-void ReferenceRigidBodyOperations::projectBodies(const double* positions, double* velocities) {
+    const double* x = coordinates(positions);
+    double* v = coordinates(velocities);
+    // The core takes the bodies four at a time.
     forEachBodyRangeAndFreeParticle(
         [&](int begin, int end) {
-            RigidBodyMath::kickAndProjectBodiesVelocities(views.data() + begin, end - begin, RigidBodyMath::Kick(),
-                                                          positions, velocities);
+            RigidBodyMath::kickAndProjectBodiesVelocities(views.data() + begin, end - begin, RigidBodyMath::Kick(), x, v);
             return INT_MAX;
         },
         nullptr);
 }
 
-void ReferenceRigidBodyOperations::projectNonRigidVelocities(vector<Vec3>& positions, vector<Vec3>& velocities,
-                                                           double tolerance) {
+void ReferenceRigidBodyState::projectNonRigidArrays(vector<Vec3>& positions, vector<Vec3>& velocities,
+                                                    double tolerance) {
     constrainFreeVelocities(positions, velocities, tolerance);
     const double* x = coordinates(positions);
     double* v = coordinates(velocities);
     forEachBody([&](int b) {
-        RigidBodyMath::projectNonRigidBodyVelocities(view(b), x, v, RigidBodyMath::RigidVelocityTolerance);
+        RigidBodyMath::projectNonRigidBodyVelocities(views[b], x, v, RigidBodyMath::RigidVelocityTolerance);
         return true;
     });
 }
 
-void ReferenceRigidBodyOperations::kick(vector<Vec3>& velocities, const vector<Vec3>& forces, double time) {
+void ReferenceRigidBodyState::kick(double time) {
+    vector<Vec3>& v = velocities();
+    const vector<Vec3>& f = forces();
     // Massless particles (virtual sites too) take no kick.
     forEachParticleRange([&](int begin, int end) {
         for (int i = begin; i < end; i++)
             if (inverseMass[i] != 0)
-                velocities[i] += forces[i] * (time * inverseMass[i]);
+                v[i] += f[i] * (time * inverseMass[i]);
     });
 }
 
-double ReferenceRigidBodyOperations::kineticEnergy(const vector<Vec3>& velocities) const {
+double ReferenceRigidBodyState::kineticEnergyOf(const vector<Vec3>& velocities) const {
     double energy = 0;
     for (size_t i = 0; i < velocities.size(); i++)
         if (inverseMass[i] != 0)
@@ -304,39 +229,7 @@ double ReferenceRigidBodyOperations::kineticEnergy(const vector<Vec3>& velocitie
     return energy;
 }
 
-void ReferenceRigidBodyOperations::kineticEnergies(const vector<Vec3>& velocities, double& translational,
-                                                 double& rotational, double& free) const {
-    translational = rotational = free = 0;
-    for (int b = 0; b < bodies.getNumBodies(); b++) {
-        const vector<int>& atoms = bodies.getBodyParticles(b);
-        Vec3 momentum;
-        for (int i : atoms)   // body members are massive
-            momentum += velocities[i] / inverseMass[i];
-        const double mass = bodies.getBodyMass(b);
-        const Vec3 center = momentum / mass;
-        translational += 0.5 * mass * center.dot(center);
-        for (int i : atoms) {
-            const Vec3 relative = velocities[i] - center;
-            rotational += 0.5 * relative.dot(relative) / inverseMass[i];
-        }
-    }
-    for (int i : bodies.getFreeParticles())
-        free += 0.5 * velocities[i].dot(velocities[i]) / inverseMass[i];
-}
-
-vector<Vec3> ReferenceRigidBodyOperations::velocitiesForTemperature(vector<Vec3>& positions, double temperature,
-                                                                  int randomSeed, double tolerance) {
-    // Maxwell-Boltzmann per particle, then the rigid-body projection (which keeps the
-    // distribution's form on the rigid degrees of freedom), then an exact rescale to the
-    // requested kinetic temperature with the rigid-body degrees of freedom.
-    vector<Vec3> velocities = ThermalVelocities::maxwellBoltzmann(inverseMass, temperature, randomSeed);
-    projectVelocities(positions, velocities, tolerance);
-    ThermalVelocities::scaleToTemperature(bodies, inverseMass, bodies.getNumDegreesOfFreedom(getBodyDegreesOfFreedom()),
-                                           temperature, velocities);
-    return velocities;
-}
-
-void ReferenceRigidBodyOperations::collideBodies(vector<Vec3>& x, vector<Vec3>& v, double temperature,
+void ReferenceRigidBodyState::collideBodies(vector<Vec3>& x, vector<Vec3>& v, double temperature,
                                                  double tolerance) {
     // AndersenThermostat randomizes single particles (or groups held by constraints).
     // Projecting a body of which only some atoms are fresh onto rigid motion does not keep
@@ -345,28 +238,68 @@ void ReferenceRigidBodyOperations::collideBodies(vector<Vec3>& x, vector<Vec3>& 
     const double* positionData = coordinates(x);
     std::normal_distribution<double> gaussian(0.0, 1.0);
     for (int b = 0; b < bodies.getNumBodies(); b++) {
-        if (!(RigidBodyMath::nonRigidVelocityFraction(view(b), positionData, coordinates(v)) > RigidBodyMath::CollisionThreshold))
+        if (!(RigidBodyMath::nonRigidVelocityFraction(views[b], positionData, coordinates(v)) > RigidBodyMath::CollisionThreshold))
             continue;  // still rigid: no collision
         for (int i : bodies.getBodyParticles(b)) {
             double sigma = std::sqrt(BOLTZ * temperature * inverseMass[i]);
-            double gx = gaussian(collisionRandom), gy = gaussian(collisionRandom), gz = gaussian(collisionRandom);
+            double gx = gaussian(random), gy = gaussian(random), gz = gaussian(random);
             v[i] = Vec3(gx, gy, gz) * sigma;
         }
     }
-    projectNonRigidVelocities(x, v, tolerance);
+    projectNonRigidArrays(x, v, tolerance);
 }
 
-void ReferenceRigidBodyOperations::writeState(std::ostream& stream) const {
-    // Unframed: the checkpoint header frames the kernel's state.
-    stream << collisionRandom;
+void ReferenceRigidBodyState::scaleVelocities(double factor) {
+    for (Vec3& velocity : velocities())
+        velocity *= factor;
 }
 
-void ReferenceRigidBodyOperations::readState(std::istream& stream) {
-    skipFormat3Frame(stream);
-    std::mt19937_64 generator;
-    stream >> generator;
-    if (stream.fail())
-        throw OpenMMException("the checkpoint's kernel data is malformed (its random state cannot be read)");
-    collisionRandom = generator;
-    randomIsSet = true;
+void ReferenceRigidBodyState::addNoise(double friction, double temperature, double h) {
+    // Followed by project(): projected Gaussian noise is the noise on the rigid degrees of freedom.
+    vector<Vec3>& v = velocities();
+    const double a = std::exp(-friction * h);
+    const double kT = BOLTZ * temperature;
+    std::normal_distribution<double> gaussian(0.0, 1.0);
+    for (size_t i = 0; i < v.size(); i++)
+        if (inverseMass[i] != 0) {
+            const double sigma = std::sqrt((1 - a * a) * kT * inverseMass[i]);
+            const double gx = gaussian(random), gy = gaussian(random), gz = gaussian(random);
+            v[i] = v[i] * a + Vec3(gx, gy, gz) * sigma;
+        }
+}
+
+void ReferenceRigidBodyState::rotorDriftAndReset(double h, double tolerance) {
+    phase([&] {
+        vector<Vec3>& x = positions();
+        vector<Vec3>& v = velocities();
+        const vector<Vec3>& f = forces();
+        const int n = x.size();
+        // Free particles: half kick and drift, then RATTLE for their constraints (body atoms
+        // are overwritten below; they take no part in free constraints).
+        for (int i = 0; i < n; i++)
+            nextPositions[i] = (inverseMass[i] != 0 ? x[i] + (v[i] + f[i] * (0.5 * h * inverseMass[i])) * h : x[i]);
+        constrainFreePositions(x, nextPositions, tolerance);
+        const int failed = forEachBody([&](int b) {
+            return RigidBodyRotor::positionStep(views[b], coordinates(x), coordinates(v), coordinates(f), h,
+                                                coordinates(nextPositions), coordinates(nextVelocities));
+        });
+        if (failed != INT_MAX)
+            throw OpenMMException("rigid body " + std::to_string(failed) +
+                                  " would turn by more than a quarter turn in one step, or its motion is not finite; "
+                                  "the step size is too large for the forces, or they are not finite");
+        // Free particles: refuse what is not finite, as for bodies (the Context is not yet changed).
+        for (int i : bodies.getFreeParticles())
+            if (!std::isfinite(nextPositions[i][0] + nextPositions[i][1] + nextPositions[i][2]))
+                throw OpenMMException("particle " + std::to_string(i) +
+                                      " would move to a position that is not finite; the forces are not finite");
+        // Free particles' velocities from their displacement (massless ones keep theirs).
+        const double inverseStep = 1.0 / h;
+        for (int i = 0; i < n; i++) {
+            if (inverseMass[i] == 0)
+                nextVelocities[i] = v[i];
+            else if (bodies.getBodyOfParticle(i) < 0)
+                nextVelocities[i] = (nextPositions[i] - x[i]) * inverseStep;
+        }
+        acceptNewState();
+    });
 }

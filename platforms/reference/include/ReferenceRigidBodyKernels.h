@@ -1,0 +1,100 @@
+#ifndef MRATTLE_REFERENCE_RIGID_BODY_KERNELS_H_
+#define MRATTLE_REFERENCE_RIGID_BODY_KERNELS_H_
+
+#include "MRattleBussiIntegrator.h"
+#include "MRattleNoseHooverIntegrator.h"
+#include "ReferenceRigidBodyState.h"
+#include "internal/RigidBodyKernels.h"
+#include "internal/RigidBodyThermostats.h"
+#include <vector>
+
+namespace MRattlePlugin {
+
+/**
+ * A step kernel of the Reference platform, also registered on the CPU platform: its
+ * ReferenceRigidBodyState, which the API asks for everything but the step. Each kernel below
+ * is initialize() and an execute() listing the phases of that state.
+ */
+class ReferenceStepKernel : public RigidBodyStepKernel {
+public:
+    ReferenceStepKernel(const std::string& name, const OpenMM::Platform& platform)
+        : RigidBodyStepKernel(name, platform), state(name) {
+    }
+    RigidBodyState& getState() override {
+        return state;
+    }
+
+protected:
+    ReferenceRigidBodyState state;
+};
+
+/** MRattleIntegrator: velocity Verlet with M-RATTLE's resets. */
+class ReferenceIntegrateMRattleStepKernel : public ReferenceStepKernel {
+public:
+    using ReferenceStepKernel::ReferenceStepKernel;
+    void initialize(const OpenMM::System& system, const RigidBodyTopology& topology,
+                    const RigidBodyIntegrator& integrator) override;
+    void execute(OpenMM::ContextImpl& context, const RigidBodyIntegrator& integrator, bool& forcesAreValid) override;
+};
+
+/**
+ * MRattleLangevinIntegrator: LangevinMiddle's splitting with each drift reset by M-RATTLE and
+ * the velocities projected after the kick and after the noise. Leapfrog: the velocities it
+ * keeps are those of the middle of the step.
+ */
+class ReferenceIntegrateMRattleLangevinStepKernel : public ReferenceStepKernel {
+public:
+    using ReferenceStepKernel::ReferenceStepKernel;
+    /** The noise's stream is seeded now, so that a checkpoint before the first step holds it. */
+    void initialize(const OpenMM::System& system, const RigidBodyTopology& topology,
+                    const RigidBodyIntegrator& integrator) override;
+    void execute(OpenMM::ContextImpl& context, const RigidBodyIntegrator& integrator, bool& forcesAreValid) override;
+};
+
+/** MRattleNoseHooverIntegrator: velocity Verlet with M-RATTLE between two half steps of the chain. */
+class ReferenceIntegrateMRattleNoseHooverStepKernel : public ReferenceStepKernel {
+public:
+    using ReferenceStepKernel::ReferenceStepKernel;
+    /** A chain of the integrator's length, at rest, declared to the state. */
+    void initialize(const OpenMM::System& system, const RigidBodyTopology& topology,
+                    const RigidBodyIntegrator& integrator) override;
+    void execute(OpenMM::ContextImpl& context, const RigidBodyIntegrator& integrator, bool& forcesAreValid) override;
+    double computeHeatBathEnergy(OpenMM::ContextImpl& context, const RigidBodyIntegrator& integrator) override;
+
+private:
+    /** The chain over half a step at the current kinetic energy: the factor for every velocity. */
+    double chainHalfStep(OpenMM::ContextImpl& context, const MRattleNoseHooverIntegrator& integrator);
+    RigidBodyThermostats::NoseHooverChain chain;
+};
+
+/** MRattleBussiIntegrator: velocity Verlet with M-RATTLE between two stochastic velocity rescalings. */
+class ReferenceIntegrateMRattleBussiStepKernel : public ReferenceStepKernel {
+public:
+    using ReferenceStepKernel::ReferenceStepKernel;
+    /** The stream seeded now (so that a checkpoint before the first step holds it); no work yet. */
+    void initialize(const OpenMM::System& system, const RigidBodyTopology& topology,
+                    const RigidBodyIntegrator& integrator) override;
+    void execute(OpenMM::ContextImpl& context, const RigidBodyIntegrator& integrator, bool& forcesAreValid) override;
+    /** Minus the work of the rescalings. */
+    double computeHeatBathEnergy(OpenMM::ContextImpl& context, const RigidBodyIntegrator& integrator) override {
+        return -work[0];
+    }
+
+private:
+    /** One rescaling over half a step: the factor for every velocity; its work is added up. */
+    double rescalingHalfStep(OpenMM::ContextImpl& context, const MRattleBussiIntegrator& integrator);
+    std::vector<double> work = {0.0};   // the kinetic energy the rescalings have added (kJ/mol)
+};
+
+/** RigidSplittingIntegrator (the baseline): velocity Verlet whose position update is a free-rotor splitting per body. */
+class ReferenceIntegrateRigidSplittingStepKernel : public ReferenceStepKernel {
+public:
+    using ReferenceStepKernel::ReferenceStepKernel;
+    void initialize(const OpenMM::System& system, const RigidBodyTopology& topology,
+                    const RigidBodyIntegrator& integrator) override;
+    void execute(OpenMM::ContextImpl& context, const RigidBodyIntegrator& integrator, bool& forcesAreValid) override;
+};
+
+} // namespace MRattlePlugin
+
+#endif

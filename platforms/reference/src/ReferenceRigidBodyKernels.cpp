@@ -1,0 +1,156 @@
+#include "ReferenceRigidBodyKernels.h"
+#include "MRattleIntegrator.h"
+#include "MRattleLangevinIntegrator.h"
+#include "RigidSplittingIntegrator.h"
+#include "openmm/reference/SimTKOpenMMRealType.h"
+
+using namespace MRattlePlugin;
+using namespace OpenMM;
+
+// ---- MRattleIntegrator -------------------------------------------------------------------
+
+void ReferenceIntegrateMRattleStepKernel::initialize(const System& system, const RigidBodyTopology& topology,
+                                                     const RigidBodyIntegrator& integrator) {
+    state.initialize(system, topology);
+}
+
+void ReferenceIntegrateMRattleStepKernel::execute(ContextImpl& context, const RigidBodyIntegrator& bound,
+                                                  bool& forcesAreValid) {
+    const MRattleIntegrator& integrator = static_cast<const MRattleIntegrator&>(bound);
+    const double h = integrator.getStepSize(), tolerance = integrator.getConstraintTolerance();
+    // Velocity Verlet: half kick, drift and reset, new forces, half kick and projection.
+    state.beginStep(context, integrator, forcesAreValid);
+    state.driftAndReset(0.5 * h, h, tolerance);
+    state.computeForces(context, integrator, forcesAreValid);
+    state.kick(0.5 * h);
+    state.project(tolerance);
+    state.endStep(h, forcesAreValid);
+}
+
+// ---- MRattleLangevinIntegrator -----------------------------------------------------------
+
+void ReferenceIntegrateMRattleLangevinStepKernel::initialize(const System& system, const RigidBodyTopology& topology,
+                                                             const RigidBodyIntegrator& integrator) {
+    state.initialize(system, topology);
+    state.seedRandom(static_cast<const MRattleLangevinIntegrator&>(integrator).getRandomNumberSeed());
+}
+
+void ReferenceIntegrateMRattleLangevinStepKernel::execute(ContextImpl& context, const RigidBodyIntegrator& bound,
+                                                          bool& forcesAreValid) {
+    const MRattleLangevinIntegrator& integrator = static_cast<const MRattleLangevinIntegrator&>(bound);
+    const double h = integrator.getStepSize(), tolerance = integrator.getConstraintTolerance();
+    const double friction = integrator.getFriction();
+    // LangevinMiddle: kick and projection, half drift and reset, noise and projection, half
+    // drift and reset, projection, then the forces for the next step's kick.
+    state.beginStep(context, integrator, forcesAreValid);
+    state.kick(h);
+    state.project(tolerance);
+    if (friction == 0)
+        state.driftAndReset(0.0, h, tolerance);
+    else {
+        state.driftAndReset(0.0, 0.5 * h, tolerance);
+        state.addNoise(friction, integrator.getTemperature(), h);
+        state.project(tolerance);
+        state.driftAndReset(0.0, 0.5 * h, tolerance);
+    }
+    state.project(tolerance);
+    state.computeForces(context, integrator, forcesAreValid);
+    state.endStep(h, forcesAreValid);
+}
+
+// ---- MRattleNoseHooverIntegrator ---------------------------------------------------------
+
+void ReferenceIntegrateMRattleNoseHooverStepKernel::initialize(const System& system, const RigidBodyTopology& topology,
+                                                               const RigidBodyIntegrator& integrator) {
+    state.initialize(system, topology);
+    chain = RigidBodyThermostats::NoseHooverChain(
+        static_cast<const MRattleNoseHooverIntegrator&>(integrator).getChainLength());
+    state.declareIntegratorState({{"chainPositions", &chain.positions}, {"chainVelocities", &chain.velocities}},
+                                 true, false);
+}
+
+void ReferenceIntegrateMRattleNoseHooverStepKernel::execute(ContextImpl& context, const RigidBodyIntegrator& bound,
+                                                            bool& forcesAreValid) {
+    const MRattleNoseHooverIntegrator& integrator = static_cast<const MRattleNoseHooverIntegrator&>(bound);
+    const double h = integrator.getStepSize(), tolerance = integrator.getConstraintTolerance();
+    // The chain's half step, velocity Verlet (as MRattleIntegrator's), the chain's half step.
+    state.beginStep(context, integrator, forcesAreValid);
+    state.scaleVelocities(chainHalfStep(context, integrator));
+    state.driftAndReset(0.5 * h, h, tolerance);
+    state.computeForces(context, integrator, forcesAreValid);
+    state.kick(0.5 * h);
+    state.project(tolerance);
+    state.scaleVelocities(chainHalfStep(context, integrator));
+    state.endStep(h, forcesAreValid);
+}
+
+double ReferenceIntegrateMRattleNoseHooverStepKernel::chainHalfStep(ContextImpl& context,
+                                                                    const MRattleNoseHooverIntegrator& integrator) {
+    return chain.propagate(state.computeKineticEnergy(context), state.getNumDegreesOfFreedom(),
+                           BOLTZ * integrator.getTemperature(), integrator.getCollisionFrequency(),
+                           0.5 * integrator.getStepSize(), integrator.getNumMultiTimeSteps(),
+                           RigidBodyThermostats::yoshidaSuzukiWeights(integrator.getNumYoshidaSuzukiTimeSteps()));
+}
+
+double ReferenceIntegrateMRattleNoseHooverStepKernel::computeHeatBathEnergy(ContextImpl& context,
+                                                                           const RigidBodyIntegrator& bound) {
+    const MRattleNoseHooverIntegrator& integrator = static_cast<const MRattleNoseHooverIntegrator&>(bound);
+    return chain.energy(state.getNumDegreesOfFreedom(), BOLTZ * integrator.getTemperature(),
+                        integrator.getCollisionFrequency());
+}
+
+// ---- MRattleBussiIntegrator --------------------------------------------------------------
+
+void ReferenceIntegrateMRattleBussiStepKernel::initialize(const System& system, const RigidBodyTopology& topology,
+                                                          const RigidBodyIntegrator& integrator) {
+    state.initialize(system, topology);
+    state.seedRandom(static_cast<const MRattleBussiIntegrator&>(integrator).getRandomNumberSeed());
+    work = {0.0};
+    state.declareIntegratorState({{"rescalingWork", &work}}, false, true);
+}
+
+void ReferenceIntegrateMRattleBussiStepKernel::execute(ContextImpl& context, const RigidBodyIntegrator& bound,
+                                                       bool& forcesAreValid) {
+    const MRattleBussiIntegrator& integrator = static_cast<const MRattleBussiIntegrator&>(bound);
+    const double h = integrator.getStepSize(), tolerance = integrator.getConstraintTolerance();
+    // A rescaling over half a step, velocity Verlet (as MRattleIntegrator's), another rescaling.
+    state.beginStep(context, integrator, forcesAreValid);
+    state.scaleVelocities(rescalingHalfStep(context, integrator));
+    state.driftAndReset(0.5 * h, h, tolerance);
+    state.computeForces(context, integrator, forcesAreValid);
+    state.kick(0.5 * h);
+    state.project(tolerance);
+    state.scaleVelocities(rescalingHalfStep(context, integrator));
+    state.endStep(h, forcesAreValid);
+}
+
+double ReferenceIntegrateMRattleBussiStepKernel::rescalingHalfStep(ContextImpl& context,
+                                                                   const MRattleBussiIntegrator& integrator) {
+    const double kineticEnergy = state.computeKineticEnergy(context);
+    const double scale = RigidBodyThermostats::csvrScale(kineticEnergy, state.getNumDegreesOfFreedom(),
+                                                         BOLTZ * integrator.getTemperature(),
+                                                         integrator.getCollisionFrequency(),
+                                                         0.5 * integrator.getStepSize(), state.randomStream());
+    work[0] += (scale * scale - 1) * kineticEnergy;
+    return scale;
+}
+
+// ---- RigidSplittingIntegrator ------------------------------------------------------------
+
+void ReferenceIntegrateRigidSplittingStepKernel::initialize(const System& system, const RigidBodyTopology& topology,
+                                                            const RigidBodyIntegrator& integrator) {
+    state.initialize(system, topology);
+}
+
+void ReferenceIntegrateRigidSplittingStepKernel::execute(ContextImpl& context, const RigidBodyIntegrator& bound,
+                                                         bool& forcesAreValid) {
+    const RigidSplittingIntegrator& integrator = static_cast<const RigidSplittingIntegrator&>(bound);
+    const double h = integrator.getStepSize(), tolerance = integrator.getConstraintTolerance();
+    // Velocity Verlet: half kick and the rotors' position step, new forces, half kick and projection.
+    state.beginStep(context, integrator, forcesAreValid);
+    state.rotorDriftAndReset(h, tolerance);
+    state.computeForces(context, integrator, forcesAreValid);
+    state.kick(0.5 * h);
+    state.project(tolerance);
+    state.endStep(h, forcesAreValid);
+}
