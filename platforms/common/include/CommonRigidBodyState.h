@@ -72,12 +72,12 @@ public:
     void scaleVelocities();
     /** Velocities kicked over this time by the Context's forces. */
     void kick(double time);
-    /** A drift over h with M-RATTLE's reset of each body and SHAKE for the free constraints. */
-    void driftAndReset(double h);
-    /** Langevin's friction and noise, v = decay v + scale sqrt(1/m) g; a project() must follow. */
-    void addNoise(double decay, double scale);
-    /** RATTLE's velocity step: bodies onto rigid-body motion, free constraints to the step's tolerance. */
-    void project();
+    /** A kick over kickTime (0: none), then a drift over h with M-RATTLE's reset of each body and SHAKE for the free constraints. */
+    void driftAndReset(double kickTime, double h, double tolerance);
+    /** Langevin's friction and noise over h (v = a v + sqrt((1 - a^2) kT / m) g, a = exp(-friction h)); a project() must follow. */
+    void addNoise(double friction, double temperature, double h);
+    /** RATTLE's velocity step: bodies onto rigid-body motion, free constraints to the tolerance. */
+    void project(double tolerance);
     /** Virtual sites at the new positions, then the forces there. */
     void computeForces(OpenMM::ContextImpl& context, const RigidBodyIntegrator& integrator, bool& forcesAreValid);
     /** The clock, OpenMM's reordering, and the lazy failure check (a failure found is undone and thrown). */

@@ -1,8 +1,6 @@
 #include "CommonStepKernels.h"
 #include "MRattleLangevinIntegrator.h"
 #include "openmm/common/ContextSelector.h"
-#include "openmm/reference/SimTKOpenMMRealType.h"
-#include <cmath>
 
 using namespace MRattlePlugin;
 using namespace OpenMM;
@@ -15,13 +13,13 @@ void CommonIntegrateMRattleStepKernel::initialize(const System& system, const Ri
 void CommonIntegrateMRattleStepKernel::execute(ContextImpl& context, const RigidBodyIntegrator& integrator,
                                                bool& forcesAreValid) {
     ContextSelector selector(state.computeContext());
-    const double h = integrator.getStepSize();
+    const double h = integrator.getStepSize(), tolerance = integrator.getConstraintTolerance();
+    // Velocity Verlet: half kick, drift and reset (one pass), new forces, half kick and projection (one pass).
     state.beginStep(context, integrator, forcesAreValid);
-    state.kick(0.5 * h);
-    state.driftAndReset(h);
+    state.driftAndReset(0.5 * h, h, tolerance);
     state.computeForces(context, integrator, forcesAreValid);
     state.kick(0.5 * h);
-    state.project();
+    state.project(tolerance);
     state.endStep(h, forcesAreValid);
 }
 
@@ -31,24 +29,26 @@ void CommonIntegrateMRattleLangevinStepKernel::initialize(const System& system, 
     state.initRandomNumbers(static_cast<const MRattleLangevinIntegrator&>(integrator).getRandomNumberSeed());
 }
 
-void CommonIntegrateMRattleLangevinStepKernel::execute(ContextImpl& context, const RigidBodyIntegrator& base,
+void CommonIntegrateMRattleLangevinStepKernel::execute(ContextImpl& context, const RigidBodyIntegrator& bound,
                                                        bool& forcesAreValid) {
-    const MRattleLangevinIntegrator& integrator = static_cast<const MRattleLangevinIntegrator&>(base);
+    const MRattleLangevinIntegrator& integrator = static_cast<const MRattleLangevinIntegrator&>(bound);
     ContextSelector selector(state.computeContext());
-    const double h = integrator.getStepSize(), friction = integrator.getFriction();
+    const double h = integrator.getStepSize(), tolerance = integrator.getConstraintTolerance();
+    const double friction = integrator.getFriction();
+    // LangevinMiddle: kick and projection, half drift and reset, noise and projection (one
+    // pass), half drift and reset, projection (a second), then the forces for the next step.
     state.beginStep(context, integrator, forcesAreValid);
     state.kick(h);
-    state.project();
+    state.project(tolerance);
     if (friction == 0)
-        state.driftAndReset(h);
+        state.driftAndReset(0.0, h, tolerance);
     else {
-        const double a = std::exp(-friction * h);
-        state.driftAndReset(0.5 * h);
-        state.addNoise(a, std::sqrt((1 - a * a) * BOLTZ * integrator.getTemperature()));
-        state.project();
-        state.driftAndReset(0.5 * h);
+        state.driftAndReset(0.0, 0.5 * h, tolerance);
+        state.addNoise(friction, integrator.getTemperature(), h);
+        state.project(tolerance);
+        state.driftAndReset(0.0, 0.5 * h, tolerance);
     }
-    state.project();
+    state.project(tolerance);
     state.computeForces(context, integrator, forcesAreValid);
     state.endStep(h, forcesAreValid);
 }

@@ -9,6 +9,7 @@
 #include "openmm/common/IntegrationUtilities.h"
 #include "openmm/internal/ContextImpl.h"
 #include "openmm/reference/SimTKOpenMMRealType.h"
+#include <cmath>
 #include <sstream>
 
 using namespace MRattlePlugin;
@@ -229,7 +230,10 @@ void CommonRigidBodyState::kick(double time) {
     queue(Slot::Kick).kickTime = time;
 }
 
-void CommonRigidBodyState::driftAndReset(double h) {
+void CommonRigidBodyState::driftAndReset(double kickTime, double h, double tolerance) {
+    this->tolerance = tolerance;
+    if (kickTime != 0)
+        kick(kickTime);
     // A pass whose noise a drift follows leaves the bodies' projection after the noise to that
     // drift's reset, which reads only what the projection keeps (kernels/advance.cc).
     if (pending.last == Slot::NoiseProjected)
@@ -237,13 +241,15 @@ void CommonRigidBodyState::driftAndReset(double h) {
     queue(Slot::Drift).driftTime = h;
 }
 
-void CommonRigidBodyState::addNoise(double decay, double scale) {
+void CommonRigidBodyState::addNoise(double friction, double temperature, double h) {
+    const double a = std::exp(-friction * h);
     Pass& pass = queue(Slot::Noise);
-    pass.noiseDecay = decay;
-    pass.noiseScale = scale;
+    pass.noiseDecay = a;
+    pass.noiseScale = std::sqrt((1 - a * a) * BOLTZ * temperature);
 }
 
-void CommonRigidBodyState::project() {
+void CommonRigidBodyState::project(double tolerance) {
+    this->tolerance = tolerance;
     if (pending.last == Slot::Kick)
         pending.last = Slot::ProjectAfterKick, pending.projectAfterKick = true;
     else if (pending.last == Slot::Noise)

@@ -15,18 +15,19 @@ using std::vector;
 void CommonThermostatStepKernel::execute(ContextImpl& context, const RigidBodyIntegrator& integrator,
                                          bool& forcesAreValid) {
     ContextSelector selector(state.computeContext());
-    const double h = integrator.getStepSize();
-    const bool coupled = collisionFrequency(integrator) != 0;  // uncoupled: MRattleIntegrator's step
+    const double h = integrator.getStepSize(), tolerance = integrator.getConstraintTolerance();
+    // The thermostat's half step, velocity Verlet (as MRattleIntegrator's), its half step again;
+    // uncoupled, MRattleIntegrator's step.
+    const bool coupled = collisionFrequency(integrator) != 0;
     state.beginStep(context, integrator, forcesAreValid);
     if (coupled) {
         halfStep(integrator);
         state.scaleVelocities();
     }
-    state.kick(0.5 * h);
-    state.driftAndReset(h);
+    state.driftAndReset(0.5 * h, h, tolerance);
     state.computeForces(context, integrator, forcesAreValid);
     state.kick(0.5 * h);
-    state.project();
+    state.project(tolerance);
     if (coupled) {
         halfStep(integrator);
         state.scaleVelocities();
