@@ -16,6 +16,11 @@ public:
     CommonStepKernel(const std::string& name, const OpenMM::Platform& platform, OpenMM::ComputeContext& cc)
         : RigidBodyStepKernel(name, platform), state(cc, IntegratorNames::ofStepKernel(name).integrator) {
     }
+    /** The state alone; an integrator with set-up of its own overrides this. */
+    void initialize(const OpenMM::System& system, const RigidBodyTopology& topology,
+                    const RigidBodyIntegrator& integrator) override {
+        state.initialize(system, topology);
+    }
     RigidBodyState& getState() override {
         return state;
     }
@@ -28,8 +33,6 @@ protected:
 class CommonIntegrateMRattleStepKernel : public CommonStepKernel {
 public:
     using CommonStepKernel::CommonStepKernel;
-    void initialize(const OpenMM::System& system, const RigidBodyTopology& topology,
-                    const RigidBodyIntegrator& integrator) override;
     void execute(OpenMM::ContextImpl& context, const RigidBodyIntegrator& integrator, bool& forcesAreValid) override;
 };
 

@@ -5,11 +5,6 @@
 using namespace MRattlePlugin;
 using namespace OpenMM;
 
-void CommonIntegrateMRattleStepKernel::initialize(const System& system, const RigidBodyTopology& topology,
-                                                  const RigidBodyIntegrator& integrator) {
-    state.initialize(system, topology);
-}
-
 void CommonIntegrateMRattleStepKernel::execute(ContextImpl& context, const RigidBodyIntegrator& integrator,
                                                bool& forcesAreValid) {
     ContextSelector selector(state.computeContext());
