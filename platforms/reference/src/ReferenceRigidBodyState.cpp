@@ -150,16 +150,6 @@ void ReferenceRigidBodyState::beginStep(ContextImpl& context, const RigidBodyInt
         startRandom = random;
 }
 
-void ReferenceRigidBodyState::driftAndReset(double kickTime, double h, double tolerance) {
-    // Into the step buffers, which then become the state: a body that finds no rotation
-    // leaves the Context as it was.
-    phase([&] {
-        driftAndResetArrays(positions(), velocities(), h, tolerance, nextPositions, nextVelocities,
-                            kickTime != 0 ? &forces() : nullptr, kickTime);
-        acceptNewState();
-    });
-}
-
 void ReferenceRigidBodyState::project(double tolerance) {
     phase([&] { projectArrays(positions(), velocities(), tolerance); });
 }
