@@ -61,6 +61,21 @@ public:
     virtual void setIntegratorParameters(OpenMM::ContextImpl& context, const IntegratorParameterValues& values) = 0;
 };
 
+/**
+ * An integrator's own variables in a checkpoint, on every platform: their common length
+ * first (int32) if lengthFirst (a Nose-Hoover chain's), then each one's values (doubles).
+ */
+OPENMM_EXPORT_MRATTLE void writeIntegratorVariables(std::ostream& stream,
+                                                    const std::vector<const std::vector<double>*>& values,
+                                                    bool lengthFirst);
+/**
+ * Read what writeIntegratorVariables() wrote into values, whose sizes say what is expected;
+ * values change only if all of it fits, else an OpenMMException says what does not (names:
+ * what the variables are called in messages).
+ */
+OPENMM_EXPORT_MRATTLE void readIntegratorVariables(std::istream& stream, const std::string& names,
+                                                   const std::vector<std::vector<double>*>& values, bool lengthFirst);
+
 } // namespace MRattlePlugin
 
 #endif
