@@ -90,30 +90,11 @@ double RigidBodyThermostats::NoseHooverChain::energy(double dof, double kT, doub
 }
 
 void RigidBodyThermostats::NoseHooverChain::write(std::ostream& stream) const {
-    const int32_t length = velocities.size();
-    stream.write(reinterpret_cast<const char*>(&length), sizeof(length));
-    stream.write(reinterpret_cast<const char*>(positions.data()), length * sizeof(double));
-    stream.write(reinterpret_cast<const char*>(velocities.data()), length * sizeof(double));
+    writeIntegratorVariables(stream, {&positions, &velocities}, true);
 }
 
 void RigidBodyThermostats::NoseHooverChain::read(std::istream& stream) {
-    int32_t length = -1;
-    stream.read(reinterpret_cast<char*>(&length), sizeof(length));
-    if (!stream)
-        throw OpenMMException("the checkpoint is truncated (it ends before the Nose-Hoover chain)");
-    if (length != (int32_t) velocities.size())
-        throw OpenMMException("the checkpoint's Nose-Hoover chain has " + std::to_string(length) +
-                              " thermostats, this integrator's " + std::to_string(velocities.size()));
-    vector<double> x(length), v(length);
-    stream.read(reinterpret_cast<char*>(x.data()), length * sizeof(double));
-    stream.read(reinterpret_cast<char*>(v.data()), length * sizeof(double));
-    if (!stream)
-        throw OpenMMException("the checkpoint is truncated (it ends in the Nose-Hoover chain)");
-    for (int j = 0; j < length; j++)
-        if (!std::isfinite(x[j]) || !std::isfinite(v[j]))
-            throw OpenMMException("the checkpoint's Nose-Hoover chain is malformed (a value that is not finite)");
-    positions.swap(x);
-    velocities.swap(v);
+    readIntegratorVariables(stream, "Nose-Hoover chain", {&positions, &velocities}, true);
 }
 
 double RigidBodyThermostats::csvrScale(double kineticEnergy, double dof, double kT, double frequency, double t,
@@ -134,17 +115,14 @@ double RigidBodyThermostats::csvrScale(double kineticEnergy, double dof, double 
 }
 
 void RigidBodyThermostats::writeCsvrWork(std::ostream& stream, double work) {
-    stream.write(reinterpret_cast<const char*>(&work), sizeof(work));
+    const vector<double> values = {work};
+    writeIntegratorVariables(stream, {&values}, false);
 }
 
 double RigidBodyThermostats::readCsvrWork(std::istream& stream) {
-    double work;
-    stream.read(reinterpret_cast<char*>(&work), sizeof(work));
-    if (!stream)
-        throw OpenMMException("the checkpoint is truncated (it ends before the thermostat's work)");
-    if (!std::isfinite(work))
-        throw OpenMMException("the checkpoint's kernel data is malformed (the thermostat's work is not finite)");
-    return work;
+    vector<double> values = {0.0};
+    readIntegratorVariables(stream, "thermostat's work", {&values}, false);
+    return values[0];
 }
 
 // The names a State's integrator parameters use (RigidBodyIntegrator checks them before a set).

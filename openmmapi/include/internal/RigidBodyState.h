@@ -35,7 +35,7 @@ public:
      * rigid ones are kept bit for bit. Throws naming a particle whose velocity is not finite.
      */
     virtual void projectVelocities(OpenMM::ContextImpl& context, double tolerance) = 0;
-    /** Maxwell-Boltzmann velocities projected onto the rigid degrees of freedom, rescaled to exactly this temperature. */
+    /** Maxwell-Boltzmann velocities projected onto the rigid degrees of freedom, at exactly this temperature. */
     virtual std::vector<OpenMM::Vec3> getVelocitiesForTemperature(OpenMM::ContextImpl& context, double temperature,
                                                                   int randomSeed, double tolerance) = 0;
     /** Sum of m v^2 / 2 over the Context's velocities. */
@@ -53,13 +53,28 @@ public:
     virtual void createCheckpoint(OpenMM::ContextImpl& context, std::ostream& stream) const = 0;
     /** Read what createCheckpoint() wrote; throws an OpenMMException saying what does not fit. */
     virtual void loadCheckpoint(OpenMM::ContextImpl& context, std::istream& stream) = 0;
-    /** A refused checkpoint left OpenMM's own part read unchecked: make what a later step could crash on valid again. */
+    /** A refused checkpoint left OpenMM's part read unchecked: make what a later step could crash on valid. */
     virtual void discardRefusedCheckpoint(OpenMM::ContextImpl& context) = 0;
     /** The integrator's variables a State carries (a thermostat's; never a random stream). */
     virtual IntegratorParameterValues getIntegratorParameters(OpenMM::ContextImpl& context) = 0;
     /** Set what getIntegratorParameters() returns (names and sizes already checked). */
     virtual void setIntegratorParameters(OpenMM::ContextImpl& context, const IntegratorParameterValues& values) = 0;
 };
+
+/**
+ * An integrator's own variables in a checkpoint, on every platform: their common length
+ * first (int32) if lengthFirst (a Nose-Hoover chain's), then each one's values (doubles).
+ */
+OPENMM_EXPORT_MRATTLE void writeIntegratorVariables(std::ostream& stream,
+                                                    const std::vector<const std::vector<double>*>& values,
+                                                    bool lengthFirst);
+/**
+ * Read what writeIntegratorVariables() wrote into values, whose sizes say what is expected;
+ * values change only if all of it fits, else an OpenMMException says what does not (names:
+ * what the variables are called in messages).
+ */
+OPENMM_EXPORT_MRATTLE void readIntegratorVariables(std::istream& stream, const std::string& names,
+                                                   const std::vector<std::vector<double>*>& values, bool lengthFirst);
 
 } // namespace MRattlePlugin
 

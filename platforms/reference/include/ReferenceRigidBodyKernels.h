@@ -86,7 +86,7 @@ private:
     std::vector<double> work = {0.0};   // the kinetic energy the rescalings have added (kJ/mol)
 };
 
-/** RigidSplittingIntegrator (the baseline): velocity Verlet whose position update is a free-rotor splitting per body. */
+/** RigidSplittingIntegrator (the baseline): velocity Verlet, its position update a free-rotor splitting per body. */
 class ReferenceIntegrateRigidSplittingStepKernel : public ReferenceStepKernel {
 public:
     using ReferenceStepKernel::ReferenceStepKernel;

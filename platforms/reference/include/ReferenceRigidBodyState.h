@@ -130,11 +130,6 @@ private:
     void forEachThread(const std::function<void(int)>& work);
     /** The core's kick by these forces (none if null) over this time. */
     RigidBodyMath::Kick kickOf(const std::vector<OpenMM::Vec3>* forces, double time) const;
-    /** Drift x, v (kicked first if forces) over h with the resets, into newPositions, newVelocities; throws on failure. */
-    void driftAndResetArrays(std::vector<OpenMM::Vec3>& x, const std::vector<OpenMM::Vec3>& v, double h,
-                             double tolerance, std::vector<OpenMM::Vec3>& newPositions,
-                             std::vector<OpenMM::Vec3>& newVelocities, const std::vector<OpenMM::Vec3>* forces,
-                             double kickTime);
     /** RATTLE's position step of the free constraints; throws naming one that did not converge. */
     void constrainFreePositions(std::vector<OpenMM::Vec3>& oldPositions, std::vector<OpenMM::Vec3>& newPositions,
                                 double tolerance);

@@ -105,51 +105,62 @@ void ReferenceRigidBodyState::forEachParticleRange(const std::function<void(int,
     });
 }
 
-void ReferenceRigidBodyState::driftAndResetArrays(vector<Vec3>& x, const vector<Vec3>& v, double h, double tolerance,
-                                                  vector<Vec3>& newPositions, vector<Vec3>& newVelocities,
-                                                  const vector<Vec3>* forces, double kickTime) {
-    // A free particle's velocity after the kick (if forces are given; free particles are massive).
-    auto kicked = [&](int i) { return forces != nullptr ? v[i] + (*forces)[i] * (kickTime * inverseMass[i]) : v[i]; };
-    for (int i : otherParticles) {   // massless: they do not move by themselves
-        newVelocities[i] = v[i];
-        newPositions[i] = x[i];
-    }
-    // One parallel region: free particles' drifts (their velocities come from the constrained
-    // displacement below), and each body's kick, drift and reset in the same passes over its
-    // atoms (the body's new positions and velocities are formed from displacements).
-    const vector<int>& freeParticles = bodies.getFreeParticles();
-    const double* oldPositions = coordinates(x);
-    const double* oldVelocities = coordinates(v);
-    double* velocitiesOut = coordinates(newVelocities);
-    double* positionsOut = coordinates(newPositions);
-    const RigidBodyMath::Kick kick = kickOf(forces, kickTime);
-    const int failed = forEachBodyRangeAndFreeParticle(
-        [&](int begin, int end) {
-            const int failed = RigidBodyMath::kickDriftAndResetBodies(views.data() + begin, end - begin, kick, h,
-                                                                      oldPositions, oldVelocities, positionsOut,
-                                                                      velocitiesOut);
-            return failed < end - begin ? begin + failed : INT_MAX;
-        },
-        [&](int begin, int end) {
-            for (int k = begin; k < end; k++) {
-                const int i = freeParticles[k];
-                newPositions[i] = x[i] + kicked(i) * h;
-            }
-        });
-    // Free particles: RATTLE for their constraints, velocities from the displacement.
-    constrainFreePositions(x, newPositions, tolerance);
-    const double inverseStep = 1.0 / h;
-    for (int i : freeParticles) {
-        newVelocities[i] = (newPositions[i] - x[i]) * inverseStep;
-        if (!std::isfinite(newPositions[i][0] + newPositions[i][1] + newPositions[i][2] + newVelocities[i][0] +
-                           newVelocities[i][1] + newVelocities[i][2]))
-            throw OpenMMException("particle " + std::to_string(i) +
-                                  " would move to a position that is not finite; its force or velocity is not finite");
-    }
-    if (failed != INT_MAX)
-        throw OpenMMException("the position reset of rigid body " + std::to_string(failed) + " found no rotation in " +
-                              std::to_string(RigidBodyMath::MaxRotationIterations) +
-                              " Newton iterations; the step size is too large for the forces, or they are not finite");
+void ReferenceRigidBodyState::driftAndReset(double kickTime, double h, double tolerance) {
+    // Into the step buffers, which then become the state: a body that finds no rotation
+    // leaves the Context as it was.
+    phase([&] {
+        vector<Vec3>& x = positions();
+        const vector<Vec3>& v = velocities();
+        const vector<Vec3>* kickForces = (kickTime != 0 ? &forces() : nullptr);
+        vector<Vec3>& newPositions = nextPositions;
+        vector<Vec3>& newVelocities = nextVelocities;
+        // A free particle's velocity after the kick (if forces are given; free particles are massive).
+        auto kicked = [&](int i) {
+            return kickForces != nullptr ? v[i] + (*kickForces)[i] * (kickTime * inverseMass[i]) : v[i];
+        };
+        for (int i : otherParticles) {   // massless: they do not move by themselves
+            newVelocities[i] = v[i];
+            newPositions[i] = x[i];
+        }
+        // One parallel region: free particles' drifts (their velocities come from the constrained
+        // displacement below), and each body's kick, drift and reset in the same passes over its
+        // atoms (the body's new positions and velocities are formed from displacements).
+        const vector<int>& freeParticles = bodies.getFreeParticles();
+        const double* oldPositions = coordinates(x);
+        const double* oldVelocities = coordinates(v);
+        double* velocitiesOut = coordinates(newVelocities);
+        double* positionsOut = coordinates(newPositions);
+        const RigidBodyMath::Kick kick = kickOf(kickForces, kickTime);
+        const int failed = forEachBodyRangeAndFreeParticle(
+            [&](int begin, int end) {
+                const int failed = RigidBodyMath::kickDriftAndResetBodies(views.data() + begin, end - begin, kick, h,
+                                                                          oldPositions, oldVelocities, positionsOut,
+                                                                          velocitiesOut);
+                return failed < end - begin ? begin + failed : INT_MAX;
+            },
+            [&](int begin, int end) {
+                for (int k = begin; k < end; k++) {
+                    const int i = freeParticles[k];
+                    newPositions[i] = x[i] + kicked(i) * h;
+                }
+            });
+        // Free particles: RATTLE for their constraints, velocities from the displacement.
+        constrainFreePositions(x, newPositions, tolerance);
+        const double inverseStep = 1.0 / h;
+        for (int i : freeParticles) {
+            newVelocities[i] = (newPositions[i] - x[i]) * inverseStep;
+            if (!std::isfinite(newPositions[i][0] + newPositions[i][1] + newPositions[i][2] + newVelocities[i][0] +
+                               newVelocities[i][1] + newVelocities[i][2]))
+                throw OpenMMException("particle " + std::to_string(i) + " would move to a position that is not "
+                                      "finite; its force or velocity is not finite");
+        }
+        if (failed != INT_MAX)
+            throw OpenMMException("the position reset of rigid body " + std::to_string(failed) +
+                                  " found no rotation in " + std::to_string(RigidBodyMath::MaxRotationIterations) +
+                                  " Newton iterations; the step size is too large for the forces, or they are not "
+                                  "finite");
+        acceptNewState();
+    });
 }
 
 void ReferenceRigidBodyState::constrainFreePositions(vector<Vec3>& oldPositions, vector<Vec3>& newPositions,
@@ -193,7 +204,8 @@ void ReferenceRigidBodyState::projectArrays(vector<Vec3>& positions, vector<Vec3
     // The core takes the bodies four at a time.
     forEachBodyRangeAndFreeParticle(
         [&](int begin, int end) {
-            RigidBodyMath::kickAndProjectBodiesVelocities(views.data() + begin, end - begin, RigidBodyMath::Kick(), x, v);
+            RigidBodyMath::kickAndProjectBodiesVelocities(views.data() + begin, end - begin, RigidBodyMath::Kick(), x,
+                                                          v);
             return INT_MAX;
         },
         nullptr);

@@ -150,16 +150,6 @@ void ReferenceRigidBodyState::beginStep(ContextImpl& context, const RigidBodyInt
         startRandom = random;
 }
 
-void ReferenceRigidBodyState::driftAndReset(double kickTime, double h, double tolerance) {
-    // Into the step buffers, which then become the state: a body that finds no rotation
-    // leaves the Context as it was.
-    phase([&] {
-        driftAndResetArrays(positions(), velocities(), h, tolerance, nextPositions, nextVelocities,
-                            kickTime != 0 ? &forces() : nullptr, kickTime);
-        acceptNewState();
-    });
-}
-
 void ReferenceRigidBodyState::project(double tolerance) {
     phase([&] { projectArrays(positions(), velocities(), tolerance); });
 }
@@ -307,40 +297,27 @@ int ReferenceRigidBodyState::getBodyDegreesOfFreedom() const {
 void ReferenceRigidBodyState::createCheckpoint(ContextImpl& context, std::ostream& stream) const {
     // Unframed (the checkpoint header frames it): the declared variables, then the random
     // stream as text, which reads to the end.
-    if (lengthInCheckpoint) {
-        const int32_t length = variables[0].second->size();
-        stream.write(reinterpret_cast<const char*>(&length), sizeof(length));
-    }
+    vector<const vector<double>*> values;
     for (const auto& variable : variables)
-        stream.write(reinterpret_cast<const char*>(variable.second->data()), variable.second->size() * sizeof(double));
+        values.push_back(variable.second);
+    if (!values.empty())
+        writeIntegratorVariables(stream, values, lengthInCheckpoint);
     stream << random;
 }
 
 void ReferenceRigidBodyState::loadCheckpoint(ContextImpl& context, std::istream& stream) {
+    // Read aside first: nothing changes unless all of it fits.
+    vector<vector<double> > read;
+    vector<vector<double>*> into;
     std::string names;
-    for (const auto& variable : variables)
-        names += (names.empty() ? "" : ", ") + variable.first;
-    if (lengthInCheckpoint) {
-        int32_t length = -1;
-        stream.read(reinterpret_cast<char*>(&length), sizeof(length));
-        if (!stream)
-            throw OpenMMException("the checkpoint is truncated (it ends before the integrator's " + names + ")");
-        if (length != (int32_t) variables[0].second->size())
-            throw OpenMMException("the checkpoint's " + names + " hold " + std::to_string(length) +
-                                  " values each, this integrator's " + std::to_string(variables[0].second->size()) +
-                                  " (another chain length?)");
+    for (const auto& variable : variables) {
+        read.push_back(*variable.second);
+        names += (names.empty() ? "" : " and ") + variable.first;
     }
-    vector<vector<double> > values(variables.size());
-    for (size_t i = 0; i < variables.size(); i++) {
-        values[i].resize(variables[i].second->size());
-        stream.read(reinterpret_cast<char*>(values[i].data()), values[i].size() * sizeof(double));
-        if (!stream)
-            throw OpenMMException("the checkpoint is truncated (it ends in the integrator's " + names + ")");
-        for (double value : values[i])
-            if (!std::isfinite(value))
-                throw OpenMMException("the checkpoint's kernel data is malformed (a value of " + variables[i].first +
-                                      " is not finite)");
-    }
+    for (vector<double>& values : read)
+        into.push_back(&values);
+    if (!into.empty())
+        readIntegratorVariables(stream, names, into, lengthInCheckpoint);
     skipFormat3Frame(stream);
     std::mt19937_64 generator;
     stream >> generator;
@@ -349,7 +326,7 @@ void ReferenceRigidBodyState::loadCheckpoint(ContextImpl& context, std::istream&
     random = generator;
     randomIsSet = true;
     for (size_t i = 0; i < variables.size(); i++)
-        *variables[i].second = values[i];
+        *variables[i].second = read[i];
 }
 
 void ReferenceRigidBodyState::discardRefusedCheckpoint(ContextImpl& context) {
