@@ -12,7 +12,6 @@
 #include "openmm/common/ComputeKernel.h"
 #include "openmm/common/ComputeProgram.h"
 #include "openmm/common/ComputeVectorTypes.h"
-#include <functional>
 #include <iosfwd>
 #include <map>
 #include <memory>
@@ -85,16 +84,13 @@ public:
 
     // ---- What an integrator's own kernels use.
     /**
-     * Declare a device array of the integrator's own (a thermostat's chain): `size` numbers in
-     * 'mixed' precision, named as a State's integrator parameter. The state backs it up with
-     * each step, puts it back when a step fails, and returns it from getIntegratorParameters.
-     * Returns its offset in integratorArrays(). Declare before the first step.
+     * Declare the integrator's own device variables once (a thermostat's chain): each a name
+     * (a State's integrator parameter) and a size, in 'mixed' precision. The state backs them
+     * up with each step, puts them back when a step fails, checkpoints them
+     * (writeIntegratorVariables; lengthFirst: their common length first) and returns them as
+     * integrator parameters. Returns each one's offset in the state's one array of them.
      */
-    int declareIntegratorArray(const std::string& name, int size);
-    /** How the declared arrays go into checkpoints (their byte layout is the integrator's). */
-    typedef std::function<void(const IntegratorParameterValues& values, std::ostream& stream)> CheckpointWriter;
-    typedef std::function<IntegratorParameterValues(std::istream& stream)> CheckpointReader;
-    void setIntegratorCheckpoint(CheckpointWriter write, CheckpointReader read);
+    std::vector<int> declareIntegratorArrays(const std::vector<std::pair<std::string, int> >& arrays, bool lengthFirst);
     /**
      * Add an integrator kernel's first arguments, STATE_ARGUMENTS in kernels/bodyMath.cc:
      * the failure flag and step index, the declared arrays, the velocity scale and
@@ -270,8 +266,7 @@ private:
     /** The declared arrays by name, from the device. */
     IntegratorParameterValues integratorValues() const;
     int integratorSize = 0;
-    CheckpointWriter writeIntegratorCheckpoint;
-    CheckpointReader readIntegratorCheckpoint;
+    bool lengthFirst = false;
     OpenMM::ComputeArray integratorArrays, integratorBackup;
 
     // The failure flag and the step's backup (CommonRigidBodyFailure.cpp).

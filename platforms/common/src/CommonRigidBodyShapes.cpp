@@ -96,8 +96,13 @@ void CommonRigidBodyState::createCheckpoint(ContextImpl& context, std::ostream& 
     const_cast<CommonRigidBodyState*>(this)->synchronize();  // a step not yet checked may have failed
     // The integrator's declared arrays first, in its own layout; then the bodies' reference
     // geometry and orientations, which read to the end. The random stream is OpenMM's, in its part.
-    if (writeIntegratorCheckpoint)
-        writeIntegratorCheckpoint(integratorValues(), stream);
+    if (!declared.empty()) {
+        const IntegratorParameterValues values = integratorValues();
+        vector<const vector<double>*> inOrder;
+        for (const DeclaredArray& array : declared)
+            inOrder.push_back(&values.at(array.name));
+        writeIntegratorVariables(stream, inOrder, lengthFirst);
+    }
     vector<double> values;
     if (rebuildsShapes()) {
         const vector<double> reference = downloadAsDouble(bodyReference, 4);
@@ -111,9 +116,18 @@ void CommonRigidBodyState::createCheckpoint(ContextImpl& context, std::ostream& 
 
 void CommonRigidBodyState::loadCheckpoint(ContextImpl& context, std::istream& stream) {
     ContextSelector selector(cc);
+    // The declared arrays read aside: nothing changes unless all of the checkpoint fits.
     IntegratorParameterValues integratorValues;
-    if (readIntegratorCheckpoint)
-        integratorValues = readIntegratorCheckpoint(stream);
+    vector<vector<double>*> into;
+    std::string names;
+    for (const DeclaredArray& array : declared) {
+        integratorValues[array.name].resize(array.size);
+        names += (names.empty() ? "" : " and ") + array.name;
+    }
+    for (const DeclaredArray& array : declared)
+        into.push_back(&integratorValues[array.name]);
+    if (!into.empty())
+        readIntegratorVariables(stream, names, into, lengthFirst);
     // The rest of the stream is what createCheckpoint() wrote after them. Checkpoints of
     // format 3 hold the device's own 4-byte length prefix of an empty state instead: no state.
     std::string state((std::istreambuf_iterator<char>(stream)), std::istreambuf_iterator<char>());
@@ -137,8 +151,7 @@ void CommonRigidBodyState::loadCheckpoint(ContextImpl& context, std::istream& st
     }
     resetFailure();
     rememberOrder();
-    if (readIntegratorCheckpoint)
-        setIntegratorParameters(context, integratorValues);
+    setIntegratorParameters(context, integratorValues);
 }
 
 void CommonRigidBodyState::discardRefusedCheckpoint(ContextImpl& context) {

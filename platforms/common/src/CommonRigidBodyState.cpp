@@ -307,24 +307,23 @@ int CommonRigidBodyState::degreesOfFreedom() const {
     return bodies.getNumDegreesOfFreedom(getBodyDegreesOfFreedom());
 }
 
-int CommonRigidBodyState::declareIntegratorArray(const std::string& name, int size) {
+vector<int> CommonRigidBodyState::declareIntegratorArrays(const vector<std::pair<std::string, int> >& arrays,
+                                                         bool lengthFirst) {
     ContextSelector selector(cc);
-    const int offset = integratorSize;
-    declared.push_back({name, offset, size});
     // One array for all, so that the step's backup of them is one copy in its first launch.
-    vector<double> values = downloadAsDouble(integratorArrays);
-    integratorSize += size;
-    values.resize(integratorSize, 0.0);
-    integratorArrays.resize(integratorSize);
-    integratorBackup.resize(integratorSize);
-    integratorArrays.upload(values, true);
-    integratorBackup.upload(values, true);
-    return offset;
-}
-
-void CommonRigidBodyState::setIntegratorCheckpoint(CheckpointWriter write, CheckpointReader read) {
-    writeIntegratorCheckpoint = write;
-    readIntegratorCheckpoint = read;
+    vector<int> offsets;
+    for (const auto& array : arrays) {
+        declared.push_back({array.first, integratorSize, array.second});
+        offsets.push_back(integratorSize);
+        integratorSize += array.second;
+    }
+    this->lengthFirst = lengthFirst;
+    const vector<double> zeros(std::max(1, integratorSize), 0.0);
+    integratorArrays.resize(zeros.size());
+    integratorBackup.resize(zeros.size());
+    integratorArrays.upload(zeros, true);
+    integratorBackup.upload(zeros, true);
+    return offsets;
 }
 
 IntegratorParameterValues CommonRigidBodyState::getIntegratorParameters(ContextImpl& context) {

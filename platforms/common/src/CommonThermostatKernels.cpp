@@ -43,24 +43,14 @@ void CommonIntegrateMRattleNoseHooverStepKernel::initialize(const System& system
     ContextSelector selector(state.computeContext());
     state.initialize(system, topology, CommonMRattleKernelSources::thermostats);
     const int length = integrator.getChainLength();
-    const int positions = state.declareIntegratorArray("chainPositions", length);
-    const int velocities = state.declareIntegratorArray("chainVelocities", length);
-    state.setIntegratorCheckpoint(
-        [](const IntegratorParameterValues& values, std::ostream& stream) {
-            RigidBodyThermostats::NoseHooverChain::fromParameters(values).write(stream);
-        },
-        [length](std::istream& stream) {
-            RigidBodyThermostats::NoseHooverChain chain(length);
-            chain.read(stream);
-            return chain.parameters();
-        });
+    const vector<int> chain = state.declareIntegratorArrays({{"chainPositions", length}, {"chainVelocities", length}}, true);
     const vector<double> w = RigidBodyThermostats::yoshidaSuzukiWeights(integrator.getNumYoshidaSuzukiTimeSteps());
     state.initializeMixedArray(weights, w, "mrattleYoshidaSuzukiWeights");
     kernel = state.program()->createKernel("noseHooverChainHalfStep");
     CommonRigidBodyState::Arguments arguments = state.integratorArguments(kernel);
     arguments.add(length);
-    arguments.add(positions);
-    arguments.add(velocities);
+    arguments.add(chain[0]);
+    arguments.add(chain[1]);
     arguments.add(weights);
     arguments.add((int) w.size());
     arguments.add(integrator.getNumMultiTimeSteps());
@@ -100,12 +90,7 @@ void CommonIntegrateMRattleBussiStepKernel::initialize(const System& system, con
     ContextSelector selector(state.computeContext());
     state.initialize(system, topology, CommonMRattleKernelSources::thermostats);
     state.initRandomNumbers(integrator.getRandomNumberSeed());
-    const int work = state.declareIntegratorArray("rescalingWork", 1);
-    state.setIntegratorCheckpoint(
-        [](const IntegratorParameterValues& values, std::ostream& stream) {
-            RigidBodyThermostats::writeCsvrWork(stream, RigidBodyThermostats::csvrWork(values));
-        },
-        [](std::istream& stream) { return RigidBodyThermostats::csvrParameters(RigidBodyThermostats::readCsvrWork(stream)); });
+    const int work = state.declareIntegratorArrays({{"rescalingWork", 1}}, false)[0];
     kernel = state.program()->createKernel("stochasticRescalingHalfStep");
     CommonRigidBodyState::Arguments arguments = state.integratorArguments(kernel);
     arguments.add(state.computeContext().getIntegrationUtilities().getRandom());
