@@ -4,7 +4,7 @@
 #         this plugin against OpenMM's own integrators on this machine: rigid TIP3P water, M-RATTLE
 #         against Verlet + SETTLE and LangevinMiddle + SETTLE (device platforms: benchmarks/cpp/device_speed,
 #         the integration's own cost and ns/day with PME; CPU and Reference: benchmarks/cpp/step_cost)
-#     ./benchmarks/run.sh paper|gains|validate-<study> [options]    the suite (benchmarks/python/run_suite.py)
+#     ./benchmarks/run.sh paper|validate-<study> [options]          the suite (benchmarks/python/run_suite.py)
 set -euo pipefail
 root="$(cd "$(dirname "$0")/.." && pwd)"
 build="${MRATTLE_BUILD_DIR:-$root/build}"

@@ -48,7 +48,6 @@ check() {
     need "liblbfgs"                        liblbfgs-dev       exists /usr/lib/*/liblbfgs.so
     need "gtest/gtest.h"                   libgtest-dev       exists /usr/include/gtest/gtest.h
     need "libgtest"                        libgtest-dev       exists /usr/lib/*/libgtest.a /usr/lib/*/libgtest.so
-    need "benchmark/benchmark.h"           libbenchmark-dev   exists /usr/include/benchmark/benchmark.h
     need "CL/cl.h"                         ocl-icd-opencl-dev exists /usr/include/CL/cl.h
     need "libOpenCL.so"                    ocl-icd-opencl-dev exists /usr/lib/*/libOpenCL.so
     # An OpenCL device on the CPU, which the OpenCL tests use.

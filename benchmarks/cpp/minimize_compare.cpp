@@ -27,11 +27,9 @@
 #include <cmath>
 #include <cstdio>
 #include <fstream>
-#include <functional>
 #include <iostream>
 #include <map>
 #include <memory>
-#include <numeric>
 #include <sstream>
 
 extern "C" void registerMRattleReferenceKernelFactories();
@@ -119,60 +117,37 @@ double rmsGeneralizedForce(const System& system, const vector<Vec3>& x, const ve
                 sum += std::pow(principal.eigenvectors().col(k).dot(tau), 2) / principal.eigenvalues()[k];
         sum += F.squaredNorm() / body.size();
     }
-    // Constraint clusters among particles outside bodies (union-find), each projected.
-    vector<int> root(n);
-    std::iota(root.begin(), root.end(), 0);
-    std::function<int(int)> find = [&](int i) { return root[i] == i ? i : root[i] = find(root[i]); };
-    vector<int> constraints;
+    // The constraints among particles outside bodies, projected out together: one dense solve
+    // (constraints of different clusters share no particle, so A A^T is block diagonal and the
+    // solution is each cluster's own; no cluster search is needed).
+    vector<int> p1, p2;
     for (int c = 0; c < system.getNumConstraints(); c++) {
-        int p1, p2;
+        int a, b;
         double d;
-        system.getConstraintParameters(c, p1, p2, d);
-        if (bodyOf[p1] >= 0 || bodyOf[p2] >= 0 || system.getParticleMass(p1) == 0 || system.getParticleMass(p2) == 0)
-            continue;
-        constraints.push_back(c);
-        root[find(p1)] = find(p2);
+        system.getConstraintParameters(c, a, b, d);
+        if (bodyOf[a] < 0 && bodyOf[b] < 0 && system.getParticleMass(a) != 0 && system.getParticleMass(b) != 0) {
+            p1.push_back(a);
+            p2.push_back(b);
+        }
     }
-    std::map<int, vector<int> > clusters;
-    for (int c : constraints) {
-        int p1, p2;
-        double d;
-        system.getConstraintParameters(c, p1, p2, d);
-        clusters[find(p1)].push_back(c);
-    }
-    vector<Vec3> projected(n);
+    const int m = p1.size();
+    vector<Vec3> projected(n), u(m);
     for (int i = 0; i < n; i++)
         projected[i] = system.getParticleMass(i) == 0 || bodyOf[i] >= 0 ? Vec3() : f[i];
-    for (const auto& cluster : clusters) {
-        const vector<int>& cs = cluster.second;
-        const int m = cs.size();
-        vector<int> p1(m), p2(m);
-        vector<Vec3> u(m);
-        for (int k = 0; k < m; k++) {
-            double d;
-            system.getConstraintParameters(cs[k], p1[k], p2[k], d);
-            u[k] = x[p2[k]] - x[p1[k]];
-            u[k] *= 1 / std::sqrt(u[k].dot(u[k]));
-        }
-        // Row k of A: -u_k on p1, +u_k on p2. Solve (A A^T) l = A f, then f -= A^T l.
-        Eigen::MatrixXd AAt = Eigen::MatrixXd::Zero(m, m);
-        Eigen::VectorXd Af(m);
-        for (int a = 0; a < m; a++) {
-            Af[a] = u[a].dot(f[p2[a]] - f[p1[a]]);
-            for (int b = 0; b < m; b++) {
-                double v = 0;
-                if (p1[a] == p1[b]) v += u[a].dot(u[b]);
-                if (p1[a] == p2[b]) v -= u[a].dot(u[b]);
-                if (p2[a] == p1[b]) v -= u[a].dot(u[b]);
-                if (p2[a] == p2[b]) v += u[a].dot(u[b]);
-                AAt(a, b) = v;
-            }
-        }
-        const Eigen::VectorXd l = AAt.ldlt().solve(Af);
-        for (int k = 0; k < m; k++) {
-            projected[p1[k]] += u[k] * l[k];
-            projected[p2[k]] -= u[k] * l[k];
-        }
+    for (int k = 0; k < m; k++)
+        u[k] = (x[p2[k]] - x[p1[k]]) / std::sqrt((x[p2[k]] - x[p1[k]]).dot(x[p2[k]] - x[p1[k]]));
+    // Row k of A: -u_k on p1, +u_k on p2. Solve (A A^T) l = A f, then f -= A^T l.
+    Eigen::MatrixXd AAt = Eigen::MatrixXd::Zero(m, m);
+    Eigen::VectorXd Af(m);
+    for (int a = 0; a < m; a++) {
+        Af[a] = u[a].dot(f[p2[a]] - f[p1[a]]);
+        for (int b = 0; b < m; b++)
+            AAt(a, b) = u[a].dot(u[b]) * ((p1[a] == p1[b]) - (p1[a] == p2[b]) - (p2[a] == p1[b]) + (p2[a] == p2[b]));
+    }
+    const Eigen::VectorXd l = AAt.ldlt().solve(Af);
+    for (int k = 0; k < m; k++) {
+        projected[p1[k]] += u[k] * l[k];
+        projected[p2[k]] -= u[k] * l[k];
     }
     for (int i = 0; i < n; i++)
         sum += projected[i].dot(projected[i]);

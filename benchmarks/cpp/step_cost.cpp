@@ -28,13 +28,13 @@
  * Timings go to --out (default stdout) as CSV; the speed-target ratios to --ratios
  * (default stderr) as CSV. Exit status 2 if any run diverged (non-finite state).
  */
-#include "BenchmarkShapes.h"
 #include "BenchmarkSupport.h"
 #include "MRattleBuildInfo.h"
 #include "MRattleIntegrator.h"
 #include "OpenMM.h"
 #include "RigidSplittingIntegrator.h"
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstdlib>
 #include <iostream>
@@ -52,6 +52,47 @@ using std::vector;
 using namespace MRattleBenchmark;
 
 namespace {
+
+/** A rigid body shape: sites (nm) about the centre of mass, and masses (amu). */
+struct Shape {
+    vector<std::array<double, 3> > sites;
+    vector<double> masses;
+};
+
+/**
+ * A non-planar, non-linear body of k atoms. k = 5 is a tetrahedral CX4 (methane-like,
+ * C-H 0.109 nm); k = 3 is a bent triatomic; otherwise k atoms on a helix of radius
+ * 0.15-0.3 nm with mixed masses (an irregular, asymmetric body).
+ */
+Shape bodyShape(int k) {
+    Shape shape;
+    if (k == 5) {
+        const double s = 0.109 / std::sqrt(3.0);
+        shape.sites = {{0, 0, 0}, {s, s, s}, {s, -s, -s}, {-s, s, -s}, {-s, -s, s}};
+        shape.masses = {12.011, 1.008, 1.008, 1.008, 1.008};
+    } else if (k == 3) {
+        shape.sites = {{0, 0, 0}, {0.09572, 0, 0}, {-0.02399, 0.09267, 0}};
+        shape.masses = {15.999, 1.008, 1.008};
+    } else {
+        const double massCycle[3] = {12.011, 1.008, 15.999};
+        for (int j = 0; j < k; j++) {
+            double radius = 0.15 + 0.15 * ((j * 7) % 5) / 4.0;
+            double angle = 2.4 * j, z = -0.3 + 0.6 * j / (k > 1 ? k - 1 : 1);
+            shape.sites.push_back({radius * std::cos(angle), radius * std::sin(angle), z});
+            shape.masses.push_back(massCycle[j % 3]);
+        }
+    }
+    double total = 0, center[3] = {0, 0, 0};
+    for (int j = 0; j < k; j++) {
+        total += shape.masses[j];
+        for (int d = 0; d < 3; d++)
+            center[d] += shape.masses[j] * shape.sites[j][d];
+    }
+    for (auto& site : shape.sites)
+        for (int d = 0; d < 3; d++)
+            site[d] -= center[d] / total;
+    return shape;
+}
 
 struct Options {
     string out, ratios;
@@ -125,7 +166,7 @@ struct Run {
  * every such angle, with zero force constant, in force group 1, which the integrator is
  * told not to evaluate: the angles inform CCMA and cost nothing per step.
  */
-void addConstraintAngles(System& system, const MRattleBenchmark::Shape& shape, int numBodies) {
+void addConstraintAngles(System& system, const Shape& shape, int numBodies) {
     const int k = shape.masses.size();
     std::set<std::pair<int, int> > constrained;
     for (int c = 0; c < system.getNumConstraints() && c < numBodies * k * k; c++) {
@@ -154,7 +195,7 @@ void addConstraintAngles(System& system, const MRattleBenchmark::Shape& shape, i
     system.addForce(angles);
 }
 
-std::unique_ptr<System> buildSystem(int numBodies, const MRattleBenchmark::Shape& shape, Pairs pairs,
+std::unique_ptr<System> buildSystem(int numBodies, const Shape& shape, Pairs pairs,
                                     int& constraintsPerBody) {
     std::unique_ptr<System> system(new System());
     const int k = shape.masses.size();
@@ -186,7 +227,7 @@ std::unique_ptr<System> buildSystem(int numBodies, const MRattleBenchmark::Shape
     return system;
 }
 
-vector<Vec3> buildPositions(int numBodies, const MRattleBenchmark::Shape& shape) {
+vector<Vec3> buildPositions(int numBodies, const Shape& shape) {
     // Bodies on a cubic lattice 1.2 nm apart (they never interact).
     int side = 1;
     while (side * side * side < numBodies)
@@ -227,7 +268,7 @@ int main(int argc, char** argv) {
             // Thread counts to run: only the CPU platform has any to choose.
             const vector<int> threadCounts = platformName == "CPU" ? options.threads : vector<int>{1};
             for (int k : options.atoms) {
-                MRattleBenchmark::Shape shape = MRattleBenchmark::bodyShape(k);
+                Shape shape = bodyShape(k);
                 vector<Variant> variants = {{"verlet", Pairs::None}, {"mrattle", Pairs::None}, {"splitting", Pairs::None}};
                 if (k == 5) {
                     variants.push_back({"mrattle_allpairs", Pairs::All});

@@ -148,8 +148,7 @@ def reversibility_section(rows, step_counts):
     return md
 
 
-def cost_section(timings, ratios, micro, prof, thread_prof, villin_rows, paper_rows, quick):
-    from suite import cost, villin
+def cost_section(timings, ratios, paper_rows):
     md = ["\n## Cost per step, forces excluded\n"]
     md.append("From `benchmarks/cpp/step_cost` (C++; see docs/benchmarks-cpp.md): N rigid bodies of k atoms whose only "
               "force is a zero-strength external force, velocities at 300 K; median time per step of interleaved "
@@ -158,39 +157,14 @@ def cost_section(timings, ratios, micro, prof, thread_prof, villin_rows, paper_r
               "3 distances constrained (a rigid water: OpenMM's SETTLE), `verlet_ccma` with 9 distance constraints "
               "per 5-atom body (OpenMM's CCMA, given the angles it needs), `mrattle_allpairs` M-RATTLE with all 10 "
               "pair constraints declared inside each body.\n")
-    villin_ratio = villin.ratio(villin_rows) if villin_rows else None
-    md.append("### Speed targets (issue 11), measured in this run\n")
-    md.append(table(cost.target_rows(ratios, micro, villin_ratio),
-                    [("target", "target"), ("measured", "measured"), ("met", "met")]))
-    md.append("Every ratio (`met` is `-` where the configuration has no target):\n")
+    md.append("Every ratio, against its target where it has one (`met` is `-` where it has none; the reasons for "
+              "the targets missed: docs/benchmarks-cpp.md):\n")
     md.append(table(ratios, [(k, k) for k in ratios[0].keys()]) if ratios else "(no ratios)\n")
     md.append("All timings (microseconds per step):\n")
     keep = [k for k in timings[0].keys() if k in ("platform", "integrator", "threads", "atoms_per_body", "bodies",
                                                    "constraints_per_body", "median_us_per_step")]
     md.append(table(timings, [(k, k) for k in keep]))
     md.append("![cost](results/cost_step_times.png)\n")
-    if micro:
-        md.append("### The numerical core alone (Google Benchmark, `RigidBodyMathBenchmarks`)\n")
-        md.append(table(micro, [("benchmark", "benchmark"), ("k", "atoms_per_body"), ("ns per body", "ns_per_body"),
-                                ("iterations", lambda r: r.get("newton_iterations", ""))],
-                        {"ns per body": "%.0f", "iterations": "%.2f"}))
-        md.append("`iterations` counts the linear first solve and the Newton or chord steps after it.\n")
-    if prof:
-        md.append("### Profile of an M-RATTLE step (perf, Reference platform, 1000 bodies of 5 atoms)\n")
-        md.append(table(prof[:8], [("share of samples (%)", "share_percent"), ("function", "function")],
-                        {"share of samples (%)": "%.1f"}))
-    if villin_rows:
-        md.append("### A solvated protein: villin headpiece in water\n")
-        md.append("OpenMM's `app/data/test.pdb` (%d atoms: villin in 2761 TIP3P waters), amber14-all.xml + "
-                  "amber14/tip3p.xml, PME (0.9 nm), bonds to hydrogen constrained in the protein, 2 fs, NVE, "
-                  "CPU platform with %d threads, from a minimised start with velocities at 300 K. "
-                  "`VerletIntegrator` uses SETTLE for the waters and CCMA for the protein; `MRattleIntegrator` has "
-                  "the waters declared rigid bodies and RATTLE for the protein. Median of %d interleaved batches of "
-                  "%d steps:\n" % (villin_rows[0]["atoms"], villin_rows[0]["threads"], villin_rows[0]["batches"],
-                                    villin_rows[0]["steps_per_batch"]))
-        md.append(table(villin_rows, [("integrator", "integrator"), ("ms per step", "ms_per_step"),
-                                      ("ns/day", "ns_per_day"), ("finite", "finite")],
-                        {"ms per step": "%.2f", "ns/day": "%.2f"}))
     if paper_rows:
         md.append("### The paper's systems, forces included\n")
         md.append("One rigid benzene and the 27-benzene cluster (the models' Lennard-Jones and Coulomb sites, no "
@@ -200,96 +174,6 @@ def cost_section(timings, ratios, micro, prof, thread_prof, villin_rows, paper_r
                   "differences between the methods are in the sections above and below, not here.\n")
         md.append(table(paper_rows, [("system", "system"), ("platform", "platform"), ("method", "method"),
                                      ("us per step", "us_per_step")], {"us per step": "%.1f"}))
-    md += limits_section(timings, ratios, micro, prof, thread_prof)
-    return md
-
-
-def timing(timings, column, platform, integrator, k, bodies=3000, threads=1):
-    """One step_cost timing (column of the first matching row) as a float; nan if that run is not in timings."""
-    values = [float(r[column]) for r in timings if r["platform"] == platform and r["integrator"] == integrator and
-              int(r["atoms_per_body"]) == k and int(r["bodies"]) == bodies and r.get("threads", "1") == str(threads)]
-    return values[0] if values else float("nan")
-
-
-def threads_reason(timings, thread_prof):
-    """Why M-RATTLE gains less than 2x from a second thread, in this run's numbers."""
-    def cpu(integrator, threads):
-        return timing(timings, "median_us_per_step", "CPU", integrator, 3, threads=threads)
-    text = ("each step's per-body work runs in two parallel regions (kick, drift and reset; kick and projection), "
-            "the calling thread taking one share. OpenMM's own part of the step, its force call, is not split and "
-            "gets slower with 2 threads (OpenMM's VerletIntegrator, 3000 waters: %.0f us with 1 thread, %.0f with "
-            "2; phase timings in docs/benchmarks-cpp.md)" % (cpu("verlet", 1), cpu("verlet", 2)))
-    if thread_prof:
-        text += ("; perf's share of the plugin in a 1-thread step bounds the speed-up at %s for k = %s" % (
-            ", ".join("%.2f" % r["amdahl_bound"] for r in thread_prof),
-            ", ".join(str(r["atoms_per_body"]) for r in thread_prof)))
-    return text
-
-
-def ccma_reason(timings):
-    """Why Verlet + CCMA is not 2x M-RATTLE's time, in this run's numbers (3000 five-atom bodies, Reference)."""
-    def us(integrator):
-        return timing(timings, "median_us_per_step", "Reference", integrator, 5)
-    bodies = 3000
-    ccma_extra = (us("verlet_ccma") - us("verlet")) * 1e3 / bodies
-    mrattle_extra = (us("mrattle") - us("verlet")) * 1e3 / bodies
-    return ("on Reference, 3000 five-atom bodies, CCMA adds %.0f ns per body to a plain Verlet step (%.0f ns for each "
-            "of its 9 constraints) and M-RATTLE %.0f ns; for 2x, M-RATTLE's would have to be under %.0f ns. With "
-            "the angles it needs, OpenMM's CCMA is that cheap at its default 1e-5 tolerance (it holds the body to that "
-            "tolerance, M-RATTLE to round-off); where M-RATTLE wins outright is the planar and redundant "
-            "constraint sets CCMA cannot handle (the accuracy section)" % (
-                ccma_extra, ccma_extra / 9, mrattle_extra, (us("verlet_ccma") / 2 - us("verlet")) * 1e3 / bodies))
-
-
-def limits_section(timings, ratios, micro, prof, thread_prof):
-    """What limits the speed targets, in numbers from this run."""
-    def per_atom(platform, integrator, k):
-        return timing(timings, "median_ns_per_atom_step", platform, integrator, k)
-
-    def micro_ns(name, k):
-        values = [r["ns_per_body"] for r in micro if r["benchmark"] == name and r["atoms_per_body"] == k]
-        return values[0] if values else float("nan")
-
-    md = ["### What limits the targets\n"]
-    if micro:
-        fixed = micro_ns("MRattlePositionUpdateFourAtATime", 3) + micro_ns("ProjectBodyVelocities", 3)
-        md.append("- **M-RATTLE against plain Verlet (target: at most 1.5x).** Each body pays a fixed cost on top of "
-                  "per-atom passes much like Verlet's: the drift and reset (%.0f ns for a 3-atom body as the kernels "
-                  "run it, the rotation solves of four bodies sharing AVX2 lanes; %.0f ns one body at a time, of "
-                  "which the scalar solve is %.0f ns) and the velocity projection (%.0f ns), %.0f ns in all. Plain "
-                  "Verlet costs %.1f ns per atom on Reference (3000 bodies of 3 atoms), %.0f ns for a whole 3-atom "
-                  "body, so the ratio is largest for small bodies and falls as they grow; for large bodies the "
-                  "per-atom passes (centre, torque condition, new positions; momenta, new velocities) dominate.\n" % (
-                      micro_ns("MRattlePositionUpdateFourAtATime", 3), micro_ns("MRattlePositionUpdate", 3),
-                      micro_ns("SolveResetRotation", 3), micro_ns("ProjectBodyVelocities", 3), fixed,
-                      per_atom("Reference", "verlet", 3), 3 * per_atom("Reference", "verlet", 3)))
-        md.append("- **Rigid water against SETTLE (target: at most 1.0x).** SETTLE solves a water's constraints in "
-                  "closed form: %.1f ns per atom on Reference against %.1f for plain Verlet, so about %.0f ns per "
-                  "water beyond Verlet, less than M-RATTLE's %.0f ns per body for the reset and the projection. A "
-                  "thermal water at 2 fs also takes the most iterations (%.2f on average in the micro-benchmark, "
-                  "against 3.00 for larger bodies): its smallest moment of inertia is small, so it turns most per "
-                  "step. The solves of four waters already share AVX2 lanes; a closed form for 3-atom bodies "
-                  "(SETTLE's own) is what would close the rest.\n" % (
-                      per_atom("Reference", "verlet_settle", 3), per_atom("Reference", "verlet", 3),
-                      3 * (per_atom("Reference", "verlet_settle", 3) - per_atom("Reference", "verlet", 3)), fixed,
-                      next((float(r["newton_iterations"]) for r in micro if r["benchmark"] == "SolveResetRotation"
-                            and r["atoms_per_body"] == 3 and r.get("newton_iterations") not in (None, "")),
-                           float("nan"))))
-    for ratio, title, why in (
-            ("verlet_ccma/mrattle", "Against Verlet with rigidifying constraints (target: 2x faster)",
-             ccma_reason(timings)),
-            ("mrattle threads 1/2", "CPU platform, 2 threads against 1 (target: 1.7x from 3000 bodies)",
-             threads_reason(timings, thread_prof)),
-            ("mrattle_allpairs/mrattle", "Declared constraints (within 10%)",
-             "constraints inside a body are ignored, so declaring them costs nothing per step"),
-            ("mrattle/splitting", "Against splitting (no slower)",
-             "the splitting baseline pays an eigen-decomposition and five trigonometric rotations per body")):
-        rows = [r for r in ratios if r["ratio"] == ratio and r["met"] != "-"]
-        met = sum(1 for r in rows if r["met"] == "yes")
-        values = sorted(float(r["value"]) for r in rows)
-        if rows:
-            md.append("- **%s**: met in %d of %d configurations (ratio %.2f to %.2f): %s.\n" % (
-                title, met, len(rows), values[0], values[-1], why))
     return md
 
 
@@ -318,26 +202,6 @@ def sampling_section(rows, runs, per_run, eq, step, quick):
               "smaller than that spread is not evidence that the methods sample differently.\n")
     md += sampling_verdict(rows, runs)
     md.append("![sampling](results/sampling_histograms.png)\n")
-    return md
-
-
-def liquid_sampling_section(rows, molecules, runs, eq, per_run, drop, dof):
-    md = ["### Periodic liquid benzene\n"]
-    md.append("%d rigid benzene molecules with PME (intra-body interactions removed), equilibrated for %g ps at "
-              "300 K (M-RATTLE with an Andersen thermostat); then, for each of %d seeds, fresh 300 K rigid-body "
-              "velocities and an NVE run of %g ps at 4 fs with each method from that same state (CPU platform), "
-              "the first %g ps dropped, a frame every 100 fs. Unlike the cluster, a periodic liquid cannot "
-              "evaporate; a mean temperature well above 300 K means the liquid was still turning potential "
-              "energy into heat after equilibration (the lattice start is far from equilibrium), so the runs "
-              "are not yet a steady state. Temperature: 2 KE / (%d k_B); total momentum is conserved (3 degrees of "
-              "freedom fewer) and angular momentum is not (periodic box), so with translational kinetic energy "
-              "taken relative to the system's centre of mass, the equipartition target for the rotational / "
-              "translational ratio is N/(N - 1). The runs of both methods start from the same state "
-              "and velocities, so their means are close by construction over short runs; compare the "
-              "differences with the spread of run means. Drift: per-run slope of the total energy.\n" % (
-                  molecules, eq, runs, per_run, drop, dof))
-    md.append(sampling_table(rows))
-    md += sampling_verdict([r for r in rows if not r["quantity"].startswith("energy drift")], runs)
     return md
 
 
@@ -382,7 +246,7 @@ def long_drift_section(rows, temperature, equilibrate_ps, sample_ps, radius):
     md.append("The 27-benzene cluster in vacuum (CPU platform, one thread). Each start (seed) is the model's lattice "
               "at %g K with that seed's orientations and velocities, equilibrated for %g ps with M-RATTLE and an "
               "Andersen thermostat at %g K (5/ps, its random numbers seeded by the same seed; 200 steps of 1 fs, "
-              "then 4 fs; `gains.equilibrate`, as for the liquid) and then discarded; the thermostat's net momentum and angular momentum are removed from the "
+              "then 4 fs; `long_drift.equilibrated_start`) and then discarded; the thermostat's net momentum and angular momentum are removed from the "
               "final velocities. From that one state each method runs NVE (%s; energy sampled every %g ps). "
               "Drift: least-squares slope of the total energy with its standard error, inflated by the residuals' "
               "autocorrelation (`stats.drift_with_error`); verdict: whether the slope is more than two standard "
@@ -478,31 +342,4 @@ def long_drift_reading(rows, claim=0.03):
              "say nothing about how the drift varies between starts; the runs from different seeds do, and they "
              "are few.\n")
     md.append(text)
-    return md
-
-
-def gains_section(rows, quick):
-    from suite import gains
-    md = ["\n## What a user gains: liquid benzene with PME\n"]
-    md.append("Liquid benzene (PME, 0.9 nm cutoff) on the CPU platform (all cores), equilibrated with M-RATTLE and an "
-              "Andersen thermostat, then NVE from the same state: the flexible all-atom model with bonds to hydrogen "
-              "constrained at 2 fs (VerletIntegrator) against the rigid model with its intra-body interactions "
-              "removed (MRattleIntegrator) at growing steps. Drift: least-squares slope of the total energy with its "
-              "standard error (inflated by the residuals' autocorrelation).\n")
-    md.append(table(rows, [("model", "model"), ("integrator", "integrator"), ("step (fs)", "step_fs"),
-                           ("DOF", "dof"), ("ns/day", "ns_per_day"),
-                           ("drift (kJ/mol/ns)", lambda r: "%+.3g +- %.2g" % (r["drift_per_ns"], r["drift_error_per_ns"])
-                            if math.isfinite(r["drift_per_ns"]) else "nan"),
-                           ("std E (kJ/mol)", "fluctuation"), ("failure", lambda r: r["failure"] or "")],
-                    {"ns/day": "%.2f", "std E (kJ/mol)": "%.3g"}))
-    flexible = rows[0]
-    tolerance = abs(flexible["drift_per_ns"]) / flexible["dof"] * 2 + 1e-3
-    best = gains.largest_stable(rows, tolerance)
-    if best:
-        md.append("Largest rigid step whose drift per degree of freedom, plus two standard errors, is within twice "
-                  "the flexible model's (%.3g kJ/mol/ns per DOF): **%g fs**, at **%.2f ns/day**, %.1f times the flexible model's %.2f ns/day.\n"
-                  % (tolerance, best["step_fs"], best["ns_per_day"], best["ns_per_day"] / flexible["ns_per_day"],
-                     flexible["ns_per_day"]))
-    else:
-        md.append("No rigid step met the drift criterion, error bars included, in this run.\n")
     return md

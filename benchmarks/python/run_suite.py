@@ -2,7 +2,6 @@
 """The benchmark suite behind docs/results.md, run through its one door, ./benchmarks/run.sh TARGET:
 
     paper                   M-RATTLE against the splitting method: accuracy, cost, sampling, drift
-    gains                   liquid benzene with PME, rigid against flexible
     validate-langevin       MRattleLangevinIntegrator against LangevinMiddle + SETTLE (also docs/results/langevin.md)
     validate-equipartition  rigid water, translational against rotational temperature
     validate-thermostats    Nose-Hoover chain and CSVR on rigid water [--study step-sizes|density|equipartition]
@@ -20,7 +19,7 @@ import time
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 ROOT = os.path.dirname(os.path.dirname(HERE))
-TARGETS = {"paper": ("accuracy", "cost", "sampling", "drift"), "gains": ("gains",),
+TARGETS = {"paper": ("accuracy", "cost", "sampling", "drift"),
            "validate-langevin": ("langevin",), "validate-equipartition": ("equipartition",),
            "validate-thermostats": ("thermostats",)}
 STUDIES = {"validate-minimization": "minimization", "validate-minimization-starts": "minimization_starts",
@@ -56,7 +55,7 @@ def main(argv=None):
         return study.main(rest + (["--build", build] if "minimization" in argv[0] else []))
     args = parse(argv)
     sys.path[:0] = [os.path.join(args.build, "python"), HERE]
-    from suite import accuracy, cost, gains, langevin, long_drift, sampling
+    from suite import accuracy, cost, langevin, long_drift, sampling
     import report
 
     out = args.out or (os.path.join(args.build, "results-quick") if args.quick else os.path.join(ROOT, "docs"))
@@ -83,24 +82,11 @@ def main(argv=None):
         write_csv(os.path.join(results_dir, "cost_step_times.csv"), timings)
         write_csv(os.path.join(results_dir, "cost_ratios.csv"), ratios)
         cost.plot(timings, os.path.join(results_dir, "cost_step_times.png"))
-        log("cost: micro-benchmarks of the numerical core")
-        micro = cost.micro_benchmarks(os.path.join(args.build, "benchmarks", "cpp", "RigidBodyMathBenchmarks"), log) \
-            if not q else []
-        write_csv(os.path.join(results_dir, "cost_micro_benchmarks.csv"), micro)
-        log("cost: profile of an M-RATTLE step (k = 5)")
-        prof = cost.profile(binary, 5, log) if not q else []
-        write_csv(os.path.join(results_dir, "cost_profile.csv"), prof)
-        log("cost: share of OpenMM's own work in a 1-thread CPU step (bounds the 2-thread speed-up)")
-        thread_prof = cost.thread_profile(binary, [3, 5, 12, 30], 3000, log) if not q else []
-        write_csv(os.path.join(results_dir, "cost_thread_profile.csv"), thread_prof)
-        log("cost: villin headpiece in water, CPU platform with 2 threads")
-        from suite import paper_cost, villin
-        vrows = villin.compare(2, 20, 7, log) if not q else []
-        write_csv(os.path.join(results_dir, "cost_villin.csv"), vrows)
+        from suite import paper_cost
         log("cost: the paper's systems (one benzene, the 27-benzene cluster), forces included")
         prows = paper_cost.compare(["Reference", "CPU"], 7 if not q else 1, 0.2 if not q else 0.01, log)
         write_csv(os.path.join(results_dir, "cost_paper_systems.csv"), prows)
-        md += report.cost_section(timings, ratios, micro, prof, thread_prof, vrows, prows, q)
+        md += report.cost_section(timings, ratios, prows)
 
     if "accuracy" in parts:
         log("accuracy: isolated benzene")
@@ -145,14 +131,6 @@ def main(argv=None):
         write_csv(os.path.join(results_dir, "sampling_comparison.csv"), srows)
         sampling.plot(res, os.path.join(results_dir, "sampling_histograms.png"))
         md += report.sampling_section(srows, len(seeds), per_run, eq, step, q)
-        log("sampling: periodic liquid benzene (steady state), both methods")
-        from suite import sampling_liquid
-        n_liquid, lseeds = 64, ([1, 2, 3, 4] if not q else [1, 2])
-        leq, lrun, ldrop = (150.0, 20.0, 2.0) if not q else (0.2, 0.6, 0.2)
-        lres, ldrifts, ldof = sampling_liquid.run_many(n_liquid, lseeds, leq, lrun, ldrop, 4.0, log)
-        lrows = sampling_liquid.compare(lres, ldrifts, n_liquid)
-        write_csv(os.path.join(results_dir, "sampling_liquid_comparison.csv"), lrows)
-        md += report.liquid_sampling_section(lrows, n_liquid, len(lseeds), leq, lrun, ldrop, ldof)
 
     if "drift" in parts:
         log("drift: long NVE of the 27-benzene cluster from equilibrated starts, both methods")
@@ -165,13 +143,6 @@ def main(argv=None):
                   [{k: v for k, v in r.items() if not k.startswith("series_")} for r in drows])
         long_drift.plot(drows, os.path.join(results_dir, "long_drift.png"))
         md += report.long_drift_section(drows, dtemp, deq, dsample, dradius)
-
-    if "gains" in parts:
-        log("gains: liquid benzene with PME")
-        grows = gains.compare(64 if q else 128, [2, 4, 6, 8, 10] if not q else [4],
-                              10.0 if not q else 0.1, 10.0 if not q else 0.1, log)
-        write_csv(os.path.join(results_dir, "gains_liquid_benzene.csv"), grows)
-        md += report.gains_section(grows, q)
 
     if "langevin" in parts:
         log("langevin: validation against LangevinMiddle + SETTLE (water NVT, NPT; liquid benzene)")

@@ -137,22 +137,3 @@ def test_benchmark_suite_formula_is_the_integrators():
         equipartition.rigid_split(noisy, x, masses, bodies)[0], rel=1e-12)
     assert equipartition.rigid_split(noisy, x, masses, bodies)[1] < equipartition.rigid_split(
         noisy, x, masses, bodies, project=False)[1]
-
-
-def test_benchmark_suite_equipartition_run_and_report():
-    """A few steps of one run of the equipartition benchmark, through to its table."""
-    sys.path.insert(0, os.path.join(ROOT, 'benchmarks', 'python'))
-    from suite import equipartition
-    system, positions, bodies = equipartition.water('spce.pdb', 'amber14/spce.xml')
-    start = equipartition.equilibrate(system, positions, 0.004, threads=1)
-    rows = equipartition.run_one('SPC/E', system, bodies, start, 'Verlet + SETTLE', 2, 0.0, 0.04, 4, threads=1)
-    assert [r['method'] for r in rows] == ['Verlet + SETTLE', equipartition.HALF_STEP]
-    for r in rows:
-        assert r['failure'] is None
-        assert 200 < r['Ttrans'][0] < 400 and 200 < r['Trot'][0] < 400
-        assert r['difference'][0] == pytest.approx(r['Trot'][0] - r['Ttrans'][0], abs=1e-9)
-    # Verlet's on-step and half-step translational temperatures differ by the half kick only.
-    assert rows[0]['Ttrans'][0] != rows[1]['Ttrans'][0]
-    md = equipartition.report(rows, {'SPC/E': len(bodies)}, True, 0.004, 0.0, 0.04, 4, 1)
-    assert any(line.startswith('| SPC/E | 2 | Verlet + SETTLE |') for line in md)
-    assert any(line.startswith('- **2 fs**') and 'SPC/E Verlet + SETTLE' in line for line in md)

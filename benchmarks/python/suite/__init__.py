@@ -1,1 +1,1 @@
-"""The benchmark suite behind docs/results.md: accuracy, cost, sampling and user gains."""
+"""The benchmark suite behind docs/results.md: the paper's comparison and the physical validations."""

@@ -24,11 +24,11 @@ import time
 
 import numpy as np
 import openmm
-from openmm import app, unit
+from openmm import unit
 
 import mrattle
 
-from . import langevin
+from . import common, langevin
 
 MODELS = (('TIP3P', 'tip3p.pdb', 'amber14/tip3p.xml'), ('SPC/E', 'spce.pdb', 'amber14/spce.xml'))
 NVE_STEPS_FS = (0.5, 1, 2, 3, 4)
@@ -41,25 +41,12 @@ TEMPERATURE = 300.0
 BLOCKS = 10
 
 
-def water(pdb_name, forcefield_name):
-    """The rigid water box with PME (0.9 nm), its waters at the model's exact geometry, and the bodies."""
-    pdb = app.PDBFile(os.path.join(os.path.dirname(app.__file__), 'data', pdb_name))
-    system = app.ForceField(forcefield_name).createSystem(pdb.topology, nonbondedMethod=app.PME,
-                                                          nonbondedCutoff=0.9 * unit.nanometers, rigidWater=True)
-    positions = langevin.exact_geometry(system, pdb.positions)
-    return system, positions, mrattle.rigidBodies(pdb.topology, system)
-
-
-def cpu(threads):
-    return openmm.Platform.getPlatformByName('CPU'), {'Threads': str(threads)}
-
-
 def equilibrate(system, positions, ps, threads, seed=11):
     """LangevinMiddle + SETTLE at 300 K, 1/ps, 2 fs: the start of every run of this model. Under a
     barostat the System's default box becomes the one reached, so that runs start in it."""
     integrator = openmm.LangevinMiddleIntegrator(TEMPERATURE * unit.kelvin, 1 / unit.picosecond, 2 * unit.femtoseconds)
     integrator.setRandomNumberSeed(seed)
-    context = openmm.Context(system, integrator, *cpu(threads))
+    context = openmm.Context(system, integrator, *common.platform('CPU', threads))
     context.setPositions(positions)
     context.setVelocitiesToTemperature(TEMPERATURE * unit.kelvin, seed)
     integrator.step(int(round(ps / 0.002)))
@@ -141,7 +128,7 @@ def run_one(model, system, bodies, start, method, step_fs, discard_ps, productio
     velocities are v + (h/2) f/m made rigid (velocity Verlet's, i.e. RATTLE's), and a second
     result gives the State velocities as they are."""
     integrator = make_integrator(method, step_fs)
-    context = openmm.Context(system, integrator, *cpu(threads))
+    context = openmm.Context(system, integrator, *common.platform('CPU', threads))
     context.setPositions(start[0])
     context.setVelocities(start[1])
     masses = np.array([system.getParticleMass(i).value_in_unit(unit.dalton) for i in range(system.getNumParticles())])
@@ -230,7 +217,7 @@ def run_model(task):
     def log(message):
         print('[%6.0f s] equipartition: %s' % (time.time() - began, message), file=sys.stderr, flush=True)
 
-    system, positions, bodies = water(pdb_name, forcefield_name)
+    system, positions, bodies = langevin.water(pdb_name, forcefield_name)
     start = equilibrate(system, positions, equilibrate_ps, threads)
     log('%s, %d waters, equilibrated %.1f ps' % (name, len(bodies), equilibrate_ps))
     runs = model_runs(name, methods)

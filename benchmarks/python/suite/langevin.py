@@ -32,24 +32,22 @@ def verdict(value, error, target, tolerance):
     return 'no (%.1f SE outside the tolerance)' % ((deviation - allowed) / error)
 
 
-def water_system(barostat=False):
-    pdb = app.PDBFile(os.path.join(os.path.dirname(app.__file__), 'data', 'tip3p.pdb'))
-    forcefield = app.ForceField('amber14/tip3p.xml')
-    system = forcefield.createSystem(pdb.topology, nonbondedMethod=app.PME, nonbondedCutoff=0.9 * unit.nanometers,
-                                     rigidWater=True)
-    if barostat:
-        system.addForce(openmm.MonteCarloBarostat(1 * unit.bar, 300 * unit.kelvin, 25))
-    return pdb, system
-
-
-def exact_geometry(system, positions):
-    """The positions with every water at exactly TIP3P's geometry (OpenMM's SETTLE through
-    applyConstraints): the PDB's waters are slightly off it, and M-RATTLE keeps the shapes it
-    is given (issue 12), so both methods start from the same molecules."""
+def water(pdb_name='tip3p.pdb', forcefield_name='amber14/tip3p.xml', barostat_seed=None):
+    """A rigid water box of OpenMM's app/data with PME (0.9 nm), its waters at the model's exact geometry
+    (OpenMM's SETTLE through applyConstraints: the PDB's waters are slightly off it, and M-RATTLE keeps the
+    shapes it is given), and the bodies; with a MonteCarloBarostat (1 bar, 300 K, every 25 steps) if a
+    barostat_seed is given (0: OpenMM picks one)."""
+    pdb = app.PDBFile(os.path.join(os.path.dirname(app.__file__), 'data', pdb_name))
+    system = app.ForceField(forcefield_name).createSystem(pdb.topology, nonbondedMethod=app.PME,
+                                                          nonbondedCutoff=0.9 * unit.nanometers, rigidWater=True)
+    if barostat_seed is not None:
+        barostat = openmm.MonteCarloBarostat(1 * unit.bar, 300 * unit.kelvin, 25)
+        barostat.setRandomNumberSeed(barostat_seed)
+        system.addForce(barostat)
     context = openmm.Context(system, openmm.VerletIntegrator(0.001), openmm.Platform.getPlatformByName('Reference'))
-    context.setPositions(positions)
+    context.setPositions(pdb.positions)
     context.applyConstraints(1e-12)
-    return context.getState(getPositions=True).getPositions()
+    return system, context.getState(getPositions=True).getPositions(), mrattle.rigidBodies(pdb.topology, system)
 
 
 def temperatures(velocities, masses, bodies, dof_total, removes_cm):
@@ -86,7 +84,7 @@ def oo_peak(frames, oxygens, box):
 
 
 def run_water(method, barostat, equilibrate, production, sample, seed, log):
-    pdb, system = water_system(barostat)
+    system, positions, bodies = water(barostat_seed=0 if barostat else None)  # bodies: every residue, the waters
     if method == 'M-RATTLE Langevin':
         integrator = mrattle.MRattleLangevinIntegrator(300 * unit.kelvin, 1 / unit.picosecond, 2 * unit.femtoseconds)
     else:
@@ -94,9 +92,8 @@ def run_water(method, barostat, equilibrate, production, sample, seed, log):
     integrator.setRandomNumberSeed(seed)
     platform = openmm.Platform.getPlatformByName('CPU')
     context = openmm.Context(system, integrator, platform)
-    context.setPositions(exact_geometry(system, pdb.positions))
+    context.setPositions(positions)
     context.setVelocitiesToTemperature(300 * unit.kelvin, seed)
-    bodies = mrattle.rigidBodies(pdb.topology, system)  # the waters: every residue of tip3p.pdb
     masses = np.array([system.getParticleMass(i).value_in_unit(unit.dalton) for i in range(system.getNumParticles())])
     removes_cm = any(isinstance(f, openmm.CMMotionRemover) for f in system.getForces())
     dof = 6 * len(bodies) - (3 if removes_cm else 0)

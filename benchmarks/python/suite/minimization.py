@@ -19,8 +19,7 @@ root = os.path.dirname(os.path.dirname(os.path.dirname(os.path.dirname(os.path.a
 
 
 def cases(quick):
-    import openmm
-    from openmm import app, unit
+    from openmm import app
     import mrattle
     data = os.path.join(os.path.dirname(app.__file__), 'data')
 

@@ -30,7 +30,7 @@ from openmm import unit
 
 import mrattle
 
-from . import equipartition, langevin
+from . import common, equipartition, langevin
 from .stats import drift_with_error
 
 TEMPERATURE = 300.0
@@ -58,10 +58,6 @@ def make_integrator(method, step_fs):
     if method == M_RATTLE_LANGEVIN:
         return equipartition.make_integrator(method, step_fs)
     raise ValueError(method)
-
-
-def platform(threads):
-    return openmm.Platform.getPlatformByName('CPU'), {'Threads': str(threads)}
 
 
 def block_variance(values, blocks=BLOCKS):
@@ -92,7 +88,7 @@ def run_series(method, step_fs, ps, start, system, bodies, threads, sample_fs=SA
     """One run's series (every sample_fs): time, kinetic, potential, conserved energy, T_trans, T_rot, density;
     oxygen positions."""
     integrator = make_integrator(method, step_fs)
-    context = openmm.Context(system, integrator, *platform(threads))
+    context = openmm.Context(system, integrator, *common.platform('CPU', threads))
     context.setPositions(start[0])
     context.setVelocities(start[1])
     rigid = isinstance(integrator, mrattle.RigidBodyIntegrator)
@@ -137,14 +133,8 @@ STEPS_FS = (2, 0.5, 1, 3, 4, 5)
 
 
 def water(barostat=False):
-    """tip3p.pdb's rigid System, its waters at TIP3P's exact geometry, and its bodies; with a seeded
-    MonteCarloBarostat (1 bar, 300 K, every 25 steps) if asked."""
-    system, positions, bodies = equipartition.water('tip3p.pdb', 'amber14/tip3p.xml')
-    if barostat:
-        force = openmm.MonteCarloBarostat(1 * unit.bar, TEMPERATURE * unit.kelvin, 25)
-        force.setRandomNumberSeed(7)
-        system.addForce(force)
-    return system, positions, bodies
+    """tip3p.pdb's rigid System (with a seeded MonteCarloBarostat if asked), exact positions and bodies."""
+    return langevin.water(barostat_seed=7 if barostat else None)
 
 
 def write_rows(path, rows, columns=None):
