@@ -1,10 +1,6 @@
 #include "internal/RigidBodyThermostats.h"
 #include "openmm/OpenMMException.h"
 #include <cmath>
-#include <cstdint>
-#include <cstring>
-#include <istream>
-#include <ostream>
 
 using namespace MRattlePlugin;
 using OpenMM::OpenMMException;
@@ -89,14 +85,6 @@ double RigidBodyThermostats::NoseHooverChain::energy(double dof, double kT, doub
     return energy;
 }
 
-void RigidBodyThermostats::NoseHooverChain::write(std::ostream& stream) const {
-    writeIntegratorVariables(stream, {&positions, &velocities}, true);
-}
-
-void RigidBodyThermostats::NoseHooverChain::read(std::istream& stream) {
-    readIntegratorVariables(stream, "Nose-Hoover chain", {&positions, &velocities}, true);
-}
-
 double RigidBodyThermostats::csvrScale(double kineticEnergy, double dof, double kT, double frequency, double t,
                                        std::mt19937_64& random) {
     if (frequency == 0 || !(kineticEnergy > 0) || !(dof > 0))
@@ -114,32 +102,13 @@ double RigidBodyThermostats::csvrScale(double kineticEnergy, double dof, double 
     return along < 0 ? -alpha : alpha;
 }
 
-void RigidBodyThermostats::writeCsvrWork(std::ostream& stream, double work) {
-    const vector<double> values = {work};
-    writeIntegratorVariables(stream, {&values}, false);
-}
-
-double RigidBodyThermostats::readCsvrWork(std::istream& stream) {
-    vector<double> values = {0.0};
-    readIntegratorVariables(stream, "thermostat's work", {&values}, false);
-    return values[0];
-}
-
 // The names a State's integrator parameters use (RigidBodyIntegrator checks them before a set).
-IntegratorParameterValues RigidBodyThermostats::NoseHooverChain::parameters() const {
-    return {{"chainPositions", positions}, {"chainVelocities", velocities}};
-}
-
 RigidBodyThermostats::NoseHooverChain RigidBodyThermostats::NoseHooverChain::fromParameters(
     const IntegratorParameterValues& values) {
     NoseHooverChain chain;
     chain.positions = values.at("chainPositions");
     chain.velocities = values.at("chainVelocities");
     return chain;
-}
-
-IntegratorParameterValues RigidBodyThermostats::csvrParameters(double work) {
-    return {{"rescalingWork", {work}}};
 }
 
 double RigidBodyThermostats::csvrWork(const IntegratorParameterValues& values) {

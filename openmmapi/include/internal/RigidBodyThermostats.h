@@ -3,9 +3,7 @@
 
 #include "internal/RigidBodyState.h"
 #include "internal/windowsExportMRattle.h"
-#include <iosfwd>
 #include <random>
-#include <string>
 #include <vector>
 
 namespace MRattlePlugin {
@@ -48,11 +46,7 @@ struct OPENMM_EXPORT_MRATTLE NoseHooverChain {
      * System's kinetic and potential energy it is the conserved quantity of the dynamics.
      */
     double energy(double dof, double kT, double frequency) const;
-    /** Its state, bit for bit (checkpoints); read() throws an OpenMMException if the stream does not fit. */
-    void write(std::ostream& stream) const;
-    void read(std::istream& stream);
-    /** Its state as integrator parameters (a State's: "chainPositions", "chainVelocities"), and back. */
-    IntegratorParameterValues parameters() const;
+    /** The chain read from a State's integrator parameters ("chainPositions", "chainVelocities"). */
     static NoseHooverChain fromParameters(const IntegratorParameterValues& values);
 };
 
@@ -69,12 +63,7 @@ struct OPENMM_EXPORT_MRATTLE NoseHooverChain {
 OPENMM_EXPORT_MRATTLE double csvrScale(double kineticEnergy, double dof, double kT, double frequency, double t,
                                        std::mt19937_64& random);
 
-/** CSVR's accumulated work into a checkpoint (a kernel's state, bit for bit). */
-OPENMM_EXPORT_MRATTLE void writeCsvrWork(std::ostream& stream, double work);
-/** The work writeCsvrWork() wrote; throws an OpenMMException if it is truncated or not finite. */
-OPENMM_EXPORT_MRATTLE double readCsvrWork(std::istream& stream);
-/** CSVR's accumulated work as integrator parameters (a State's: "rescalingWork"), and back. */
-OPENMM_EXPORT_MRATTLE IntegratorParameterValues csvrParameters(double work);
+/** CSVR's accumulated work, read from a State's integrator parameters ("rescalingWork"). */
 OPENMM_EXPORT_MRATTLE double csvrWork(const IntegratorParameterValues& values);
 
 } // namespace RigidBodyThermostats
