@@ -24,6 +24,7 @@ namespace MRattlePlugin {
  */
 class OPENMM_EXPORT_MRATTLE BodyShapeConstraints {
 public:
+    /** topology must outlive this object (a platform state owns both). */
     BodyShapeConstraints(const OpenMM::System& system, const RigidBodyTopology& topology);
     /**
      * Move the bodies that are off their constraint geometry onto it, then straighten
@@ -58,7 +59,7 @@ private:
     bool straighten(std::vector<OpenMM::Vec3>& positions) const;
     /** The constraint-geometry correction alone (of every constrained body if all). */
     bool applyConstraints(std::vector<OpenMM::Vec3>& positions, double storageError, bool all = false) const;
-    RigidBodyTopology topology;
+    const RigidBodyTopology& topology;  // the owning state's, which outlives this
     std::vector<double> inverseMasses;
     std::unique_ptr<OpenMM::ReferenceConstraints> constraints;
     std::vector<std::vector<int> > constraintsOfBody;  // indices into the three arrays below
