@@ -51,38 +51,53 @@ public:
     void execute(OpenMM::ContextImpl& context, const RigidBodyIntegrator& integrator, bool& forcesAreValid) override;
 };
 
-/** MRattleNoseHooverIntegrator: velocity Verlet with M-RATTLE between two half steps of the chain. */
-class ReferenceIntegrateMRattleNoseHooverStepKernel : public ReferenceStepKernel {
+/**
+ * A velocity-scaling thermostat (Nose-Hoover, CSVR): velocity Verlet with M-RATTLE between two
+ * half steps of the thermostat, each a factor by which the state scales every velocity.
+ */
+class ReferenceThermostatStepKernel : public ReferenceStepKernel {
 public:
     using ReferenceStepKernel::ReferenceStepKernel;
+    void execute(OpenMM::ContextImpl& context, const RigidBodyIntegrator& integrator, bool& forcesAreValid) override;
+
+protected:
+    /** The thermostat over half a step at the current kinetic energy: the factor for every velocity. */
+    virtual double halfStepFactor(OpenMM::ContextImpl& context, const RigidBodyIntegrator& integrator) = 0;
+};
+
+/** MRattleNoseHooverIntegrator: a chain's half steps. */
+class ReferenceIntegrateMRattleNoseHooverStepKernel : public ReferenceThermostatStepKernel {
+public:
+    using ReferenceThermostatStepKernel::ReferenceThermostatStepKernel;
     /** A chain of the integrator's length, at rest, declared to the state. */
     void initialize(const OpenMM::System& system, const RigidBodyTopology& topology,
                     const RigidBodyIntegrator& integrator) override;
-    void execute(OpenMM::ContextImpl& context, const RigidBodyIntegrator& integrator, bool& forcesAreValid) override;
     double computeHeatBathEnergy(OpenMM::ContextImpl& context, const RigidBodyIntegrator& integrator) override;
 
+protected:
+    double halfStepFactor(OpenMM::ContextImpl& context, const RigidBodyIntegrator& integrator) override;
+
 private:
-    /** The chain over half a step at the current kinetic energy: the factor for every velocity. */
-    double chainHalfStep(OpenMM::ContextImpl& context, const MRattleNoseHooverIntegrator& integrator);
     RigidBodyThermostats::NoseHooverChain chain;
 };
 
-/** MRattleBussiIntegrator: velocity Verlet with M-RATTLE between two stochastic velocity rescalings. */
-class ReferenceIntegrateMRattleBussiStepKernel : public ReferenceStepKernel {
+/** MRattleBussiIntegrator: stochastic velocity rescalings (CSVR) as the half steps. */
+class ReferenceIntegrateMRattleBussiStepKernel : public ReferenceThermostatStepKernel {
 public:
-    using ReferenceStepKernel::ReferenceStepKernel;
+    using ReferenceThermostatStepKernel::ReferenceThermostatStepKernel;
     /** The stream seeded now (so that a checkpoint before the first step holds it); no work yet. */
     void initialize(const OpenMM::System& system, const RigidBodyTopology& topology,
                     const RigidBodyIntegrator& integrator) override;
-    void execute(OpenMM::ContextImpl& context, const RigidBodyIntegrator& integrator, bool& forcesAreValid) override;
     /** Minus the work of the rescalings. */
     double computeHeatBathEnergy(OpenMM::ContextImpl& context, const RigidBodyIntegrator& integrator) override {
         return -work[0];
     }
 
+protected:
+    /** One rescaling; its work is added up. */
+    double halfStepFactor(OpenMM::ContextImpl& context, const RigidBodyIntegrator& integrator) override;
+
 private:
-    /** One rescaling over half a step: the factor for every velocity; its work is added up. */
-    double rescalingHalfStep(OpenMM::ContextImpl& context, const MRattleBussiIntegrator& integrator);
     std::vector<double> work = {0.0};   // the kinetic energy the rescalings have added (kJ/mol)
 };
 

@@ -58,7 +58,21 @@ void ReferenceIntegrateMRattleLangevinStepKernel::execute(ContextImpl& context, 
     state.endStep(h, forcesAreValid);
 }
 
-// ---- MRattleNoseHooverIntegrator ---------------------------------------------------------
+// ---- the thermostats ---------------------------------------------------------------------
+
+void ReferenceThermostatStepKernel::execute(ContextImpl& context, const RigidBodyIntegrator& integrator,
+                                            bool& forcesAreValid) {
+    const double h = integrator.getStepSize(), tolerance = integrator.getConstraintTolerance();
+    // The thermostat's half step, velocity Verlet (as MRattleIntegrator's), the thermostat's half step.
+    state.beginStep(context, integrator, forcesAreValid);
+    state.scaleVelocities(halfStepFactor(context, integrator));
+    state.driftAndReset(0.5 * h, h, tolerance);
+    state.computeForces(context, integrator, forcesAreValid);
+    state.kick(0.5 * h);
+    state.project(tolerance);
+    state.scaleVelocities(halfStepFactor(context, integrator));
+    state.endStep(h, forcesAreValid);
+}
 
 void ReferenceIntegrateMRattleNoseHooverStepKernel::initialize(const System& system, const RigidBodyTopology& topology,
                                                                const RigidBodyIntegrator& integrator) {
@@ -69,23 +83,9 @@ void ReferenceIntegrateMRattleNoseHooverStepKernel::initialize(const System& sys
                                  true, false);
 }
 
-void ReferenceIntegrateMRattleNoseHooverStepKernel::execute(ContextImpl& context, const RigidBodyIntegrator& bound,
-                                                            bool& forcesAreValid) {
+double ReferenceIntegrateMRattleNoseHooverStepKernel::halfStepFactor(ContextImpl& context,
+                                                                     const RigidBodyIntegrator& bound) {
     const MRattleNoseHooverIntegrator& integrator = static_cast<const MRattleNoseHooverIntegrator&>(bound);
-    const double h = integrator.getStepSize(), tolerance = integrator.getConstraintTolerance();
-    // The chain's half step, velocity Verlet (as MRattleIntegrator's), the chain's half step.
-    state.beginStep(context, integrator, forcesAreValid);
-    state.scaleVelocities(chainHalfStep(context, integrator));
-    state.driftAndReset(0.5 * h, h, tolerance);
-    state.computeForces(context, integrator, forcesAreValid);
-    state.kick(0.5 * h);
-    state.project(tolerance);
-    state.scaleVelocities(chainHalfStep(context, integrator));
-    state.endStep(h, forcesAreValid);
-}
-
-double ReferenceIntegrateMRattleNoseHooverStepKernel::chainHalfStep(ContextImpl& context,
-                                                                    const MRattleNoseHooverIntegrator& integrator) {
     return chain.propagate(state.computeKineticEnergy(context), state.getNumDegreesOfFreedom(),
                            BOLTZ * integrator.getTemperature(), integrator.getCollisionFrequency(),
                            0.5 * integrator.getStepSize(), integrator.getNumMultiTimeSteps(),
@@ -99,8 +99,6 @@ double ReferenceIntegrateMRattleNoseHooverStepKernel::computeHeatBathEnergy(Cont
                         integrator.getCollisionFrequency());
 }
 
-// ---- MRattleBussiIntegrator --------------------------------------------------------------
-
 void ReferenceIntegrateMRattleBussiStepKernel::initialize(const System& system, const RigidBodyTopology& topology,
                                                           const RigidBodyIntegrator& integrator) {
     state.initialize(system, topology);
@@ -109,23 +107,8 @@ void ReferenceIntegrateMRattleBussiStepKernel::initialize(const System& system, 
     state.declareIntegratorState({{"rescalingWork", &work}}, false, true);
 }
 
-void ReferenceIntegrateMRattleBussiStepKernel::execute(ContextImpl& context, const RigidBodyIntegrator& bound,
-                                                       bool& forcesAreValid) {
+double ReferenceIntegrateMRattleBussiStepKernel::halfStepFactor(ContextImpl& context, const RigidBodyIntegrator& bound) {
     const MRattleBussiIntegrator& integrator = static_cast<const MRattleBussiIntegrator&>(bound);
-    const double h = integrator.getStepSize(), tolerance = integrator.getConstraintTolerance();
-    // A rescaling over half a step, velocity Verlet (as MRattleIntegrator's), another rescaling.
-    state.beginStep(context, integrator, forcesAreValid);
-    state.scaleVelocities(rescalingHalfStep(context, integrator));
-    state.driftAndReset(0.5 * h, h, tolerance);
-    state.computeForces(context, integrator, forcesAreValid);
-    state.kick(0.5 * h);
-    state.project(tolerance);
-    state.scaleVelocities(rescalingHalfStep(context, integrator));
-    state.endStep(h, forcesAreValid);
-}
-
-double ReferenceIntegrateMRattleBussiStepKernel::rescalingHalfStep(ContextImpl& context,
-                                                                   const MRattleBussiIntegrator& integrator) {
     const double kineticEnergy = state.computeKineticEnergy(context);
     const double scale = RigidBodyThermostats::csvrScale(kineticEnergy, state.getNumDegreesOfFreedom(),
                                                          BOLTZ * integrator.getTemperature(),
