@@ -1,16 +1,19 @@
 /*
  * Rigid bodies in the rest of OpenMM: massless virtual sites follow their parents,
  * AndersenThermostat and MonteCarloBarostat act while bodies stay rigid, and forces outside
- * the integration force groups have no effect.
+ * the integration force groups have no effect, and forces are evaluated as often as by
+ * OpenMM's own integrators.
  *
  * A value-parameterised suite (BodyEnvironment) over every platform and rigid-body
  * integrator (allConfigs()).
  */
 #include "TestSupport.h"
+#include "openmm/internal/ForceImpl.h"
 #include "openmm/reference/SimTKOpenMMRealType.h"
 #include <gtest/gtest.h>
 #include <cmath>
 #include <iostream>
+#include <memory>
 
 using namespace OpenMM;
 using namespace MRattlePlugin;
@@ -24,6 +27,81 @@ NonbondedForce& nonbondedForce(System& system) {
         if (auto* force = dynamic_cast<NonbondedForce*>(&system.getForce(f)))
             return *force;
     throw OpenMMException("no NonbondedForce");
+}
+
+/** A Force that adds nothing and counts the force evaluations that include it. */
+class CountingForce : public Force {
+public:
+    std::shared_ptr<int> evaluations = std::make_shared<int>(0);
+
+protected:
+    ForceImpl* createImpl() const override;
+};
+
+class CountingForceImpl : public ForceImpl {
+public:
+    explicit CountingForceImpl(const CountingForce& owner) : owner(owner) {
+    }
+    void initialize(ContextImpl& context) override {
+    }
+    const Force& getOwner() const override {
+        return owner;
+    }
+    void updateContextState(ContextImpl& context, bool& forcesInvalid) override {
+    }  // (ForceImpl's own would invalidate the forces at every step)
+    double calcForcesAndEnergy(ContextImpl& context, bool includeForces, bool includeEnergy, int groups) override {
+        if (includeForces && (groups & (1 << owner.getForceGroup())) != 0)
+            (*owner.evaluations)++;
+        return 0;
+    }
+    std::map<std::string, double> getDefaultParameters() override {
+        return {};
+    }
+    std::vector<std::string> getKernelNames() override {
+        return {};
+    }
+
+private:
+    const CountingForce& owner;
+};
+
+ForceImpl* CountingForce::createImpl() const {
+    return new CountingForceImpl(*this);
+}
+
+/** Force evaluations and accepted barostat moves over a run of steps, one step at a time. */
+struct EvaluationCount {
+    int evaluations = 0, acceptedMoves = 0;
+};
+
+/** 27 rigid waters (periodic cutoff) with a MonteCarloBarostat trying a move every second step. */
+EvaluationCount countEvaluations(const std::string& platformName, Integrator& integrator, int steps) {
+    ClusterOptions options;
+    options.method = NonbondedForce::CutoffPeriodic;
+    options.cutoff = 0.4;
+    Cluster c = buildCluster(water(), 3, 0.31, 5, options);
+    MonteCarloBarostat* barostat = new MonteCarloBarostat(1.0, 300, 2);
+    barostat->setRandomNumberSeed(3);
+    c.system->addForce(barostat);
+    CountingForce* counter = new CountingForce();
+    const std::shared_ptr<int> evaluations = counter->evaluations;
+    c.system->addForce(counter);
+    Context context(*c.system, integrator, platform(platformName), platformProperties(platformName));
+    context.setPositions(c.positions);
+    context.setVelocitiesToTemperature(300, 1);
+    EvaluationCount count;
+    *evaluations = 0;
+    Vec3 a, b, box, before;
+    context.getState(0).getPeriodicBoxVectors(a, b, before);
+    for (int i = 0; i < steps; i++) {
+        integrator.step(1);
+        context.getState(0).getPeriodicBoxVectors(a, b, box);
+        if (box != before && i > 0)  // a move at the first step's start costs nothing: no forces yet
+            count.acceptedMoves++;
+        before = box;
+    }
+    count.evaluations = *evaluations;
+    return count;
 }
 
 /** Largest |(v_i - v_j) . (x_i - x_j)| / |x_i - x_j| over pairs inside bodies: zero for rigid velocities. */
@@ -239,6 +317,33 @@ TEST_P(BodyEnvironment, ForcesOutsideIntegrationGroupsHaveNoEffect) {
     }
     EXPECT_EQ(0.0, maxDeviation(final[0], final[1]));
     EXPECT_GT(maxDeviation(final[0], final[2]), 1e-3);  // with the group included the spring acts
+}
+
+TEST_P(BodyEnvironment, ForcesAreEvaluatedNoMoreOftenThanByOpenMMsOwnIntegrators) {
+    // A leapfrog integrator (MRattleLangevin) computes its forces at each step's start, after
+    // the barostat's move and any reordering, as LangevinMiddleIntegrator: one evaluation a
+    // step. A velocity-Verlet one needs them after its drift, so the first step, an accepted
+    // move and a device reordering each cost one more; OpenMM's NoseHooverIntegrator pays
+    // at least as much (it also computes forces at every step's start).
+    const int steps = 30;
+    std::unique_ptr<RigidBodyIntegrator> integrator = makeIntegrator(0.002);
+    const EvaluationCount count = countEvaluations(GetParam().platform, *integrator, steps);
+    EXPECT_GT(count.acceptedMoves, 0);  // the barostat acted
+    const bool leapfrog = GetParam().traits().forcesAtStepStart;
+    std::unique_ptr<Integrator> openmm(leapfrog ? (Integrator*) new LangevinMiddleIntegrator(300, 1, 0.002)
+                                                : (Integrator*) new NoseHooverIntegrator(300, 10, 0.002));
+    const int openmmEvaluations = countEvaluations(GetParam().platform, *openmm, steps).evaluations;
+    std::cout << steps << " steps, " << count.acceptedMoves << " accepted moves: " << count.evaluations
+              << " force evaluations; OpenMM's " << (leapfrog ? "LangevinMiddle" : "NoseHoover") << "Integrator "
+              << openmmEvaluations << std::endl;
+    if (leapfrog) {
+        EXPECT_EQ(steps, openmmEvaluations);
+        EXPECT_EQ(steps, count.evaluations);
+    } else {
+        EXPECT_LE(count.evaluations, openmmEvaluations);
+        EXPECT_GE(count.evaluations, steps + 1 + count.acceptedMoves);
+        EXPECT_LE(count.evaluations, steps + 2 + count.acceptedMoves);
+    }
 }
 
 INSTANTIATE_TEST_SUITE_P(AllConfigs, BodyEnvironment, ::testing::ValuesIn(allConfigs()), configName);

@@ -148,7 +148,8 @@ IntegratorMaker maker(Build build) {
 const std::vector<IntegratorTraits>& integrators() {
     using namespace MRattlePlugin;
     static const std::vector<IntegratorTraits> list = {
-        // name, conservesEnergy, stochastic, runsOnDevicePlatforms, hasOwnState, rescalesVelocities, make, removeNoise, heatBathEnergy
+        // name, conservesEnergy, stochastic, runsOnDevicePlatforms, hasOwnState, rescalesVelocities, make, removeNoise,
+        // heatBathEnergy, forcesAtStepStart
         {"MRattle", true, false, true, false, false, maker<MRattleIntegrator>([](auto make, double h) { return make(h); })},
         {"MRattleLangevin", false, true, true, true, false,
          maker<MRattleLangevinIntegrator>([](auto make, double h) {
@@ -156,7 +157,8 @@ const std::vector<IntegratorTraits>& integrators() {
              langevin->setRandomNumberSeed(2024);
              return langevin;
          }),
-         [](RigidBodyIntegrator& integrator) { dynamic_cast<MRattleLangevinIntegrator&>(integrator).setFriction(0); }},
+         [](RigidBodyIntegrator& integrator) { dynamic_cast<MRattleLangevinIntegrator&>(integrator).setFriction(0); },
+         nullptr, true},
         {"RigidSplitting", true, false, false, false, false,
          maker<RigidSplittingIntegrator>([](auto make, double h) { return make(h); })},
         {"MRattleNoseHoover", false, false, true, true, true,  // 300 K, 10/ps, chain of 3, MTS 3, Yoshida-Suzuki 7

@@ -70,6 +70,8 @@ struct IntegratorTraits {
      * its heat bath (computeHeatBathEnergy()); else none.
      */
     std::function<double(MRattlePlugin::RigidBodyIntegrator&)> heatBathEnergy;
+    /** Computes its forces at each step's start (leapfrog, as LangevinMiddleIntegrator), not after its drift. */
+    bool forcesAtStepStart = false;
 };
 /** Every rigid-body integrator of the plugin. */
 const std::vector<IntegratorTraits>& integrators();

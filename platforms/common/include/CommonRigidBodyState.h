@@ -230,6 +230,7 @@ private:
     bool hasAndersen = false, hasRandomNumbers = false, argumentsSet = false;
     /** Set by OpenMM's reorder of atoms: the force buffer then belongs to the old order. */
     bool reordered = false;
+    bool forcesComputed = false;  // the step under way has had its computeForces phase
     /** Set by a checkpoint's load: the positions OpenMM reads next come with the reference geometry it held. */
     bool keepReference = false;
     /** Set while updateShapes() writes corrected positions (the Context notifies the integrator again). */

@@ -31,7 +31,8 @@ void CommonIntegrateMRattleLangevinStepKernel::execute(ContextImpl& context, con
     const double h = integrator.getStepSize(), tolerance = integrator.getConstraintTolerance();
     const double friction = integrator.getFriction();
     // LangevinMiddle: kick and projection, half drift and reset, noise and projection (one
-    // pass), half drift and reset, projection (a second), then the forces for the next step.
+    // pass), half drift and reset, projection (a second). The next step's beginStep computes
+    // the forces, after any barostat move or reordering: one evaluation a step.
     state.beginStep(context, integrator, forcesAreValid);
     state.kick(h);
     state.project(tolerance);
@@ -44,6 +45,5 @@ void CommonIntegrateMRattleLangevinStepKernel::execute(ContextImpl& context, con
         state.driftAndReset(0.0, 0.5 * h, tolerance);
     }
     state.project(tolerance);
-    state.computeForces(context, integrator, forcesAreValid);
     state.endStep(h, forcesAreValid);
 }

@@ -196,6 +196,7 @@ void CommonRigidBodyState::setKernelArguments() {
 void CommonRigidBodyState::beginStep(ContextImpl& context, const RigidBodyIntegrator& integrator, bool& forcesAreValid) {
     if (!argumentsSet)
         setKernelArguments();
+    forcesComputed = false;
     cc.getIntegrationUtilities().setNextStepSize(integrator.getStepSize());
     tolerance = integrator.getConstraintTolerance();
     if (hasAndersen && numBodies > 0) {
@@ -263,12 +264,17 @@ void CommonRigidBodyState::computeForces(ContextImpl& context, const RigidBodyIn
     flush();
     cc.getIntegrationUtilities().computeVirtualSites();
     forcesAreValid = false;
+    forcesComputed = true;
     context.calcForcesAndEnergy(true, false, integrator.getIntegrationForceGroups());
 }
 
 void CommonRigidBodyState::endStep(double size, bool& forcesAreValid) {
     flush();
-    forcesAreValid = true;
+    // A step without a computeForces phase leaves the forces to the next step's start.
+    if (!forcesComputed)
+        cc.getIntegrationUtilities().computeVirtualSites();
+    forcesAreValid = forcesComputed;
+    forcesComputed = false;
     cc.setTime(cc.getTime() + size);
     cc.setStepCount(cc.getStepCount() + 1);
     reordered = false;

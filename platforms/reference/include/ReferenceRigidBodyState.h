@@ -158,6 +158,7 @@ private:
     std::vector<std::pair<int, int> > freeConstraintAtoms;   // the free constraints, to check what they left
     std::vector<double> freeConstraintDistances;
     bool andersen = false, hasVirtualSites = false, threadsChecked = false;
+    bool forcesComputed = false;  // the step under way has had its computeForces phase
     int numThreads = 1;
     std::unique_ptr<OpenMM::ThreadPool> helpers;   // numThreads - 1 workers; the caller is the last
     std::mt19937_64 random;

@@ -41,7 +41,8 @@ void ReferenceIntegrateMRattleLangevinStepKernel::execute(ContextImpl& context, 
     const double h = integrator.getStepSize(), tolerance = integrator.getConstraintTolerance();
     const double friction = integrator.getFriction();
     // LangevinMiddle: kick and projection, half drift and reset, noise and projection, half
-    // drift and reset, projection, then the forces for the next step's kick.
+    // drift and reset, projection. The next step's beginStep computes the forces, after any
+    // barostat move, as LangevinMiddleIntegrator does: one evaluation a step.
     state.beginStep(context, integrator, forcesAreValid);
     state.kick(h);
     state.project(tolerance);
@@ -54,7 +55,6 @@ void ReferenceIntegrateMRattleLangevinStepKernel::execute(ContextImpl& context, 
         state.driftAndReset(0.0, 0.5 * h, tolerance);
     }
     state.project(tolerance);
-    state.computeForces(context, integrator, forcesAreValid);
     state.endStep(h, forcesAreValid);
 }
 

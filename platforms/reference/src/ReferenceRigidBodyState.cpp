@@ -131,6 +131,7 @@ int ReferenceRigidBodyState::getNumDegreesOfFreedom() const {
 void ReferenceRigidBodyState::beginStep(ContextImpl& context, const RigidBodyIntegrator& integrator,
                                         bool& forcesAreValid) {
     stepContext = &context;
+    forcesComputed = false;
     if (!threadsChecked) {
         // The platform's properties cannot be asked for while the Context is being made.
         threadsChecked = true;
@@ -157,6 +158,7 @@ void ReferenceRigidBodyState::project(double tolerance) {
 void ReferenceRigidBodyState::computeForces(ContextImpl& context, const RigidBodyIntegrator& integrator,
                                             bool& forcesAreValid) {
     forcesAreValid = false;
+    forcesComputed = true;
     phase([&] {
         // OpenMM's Reference code loops over every particle to find virtual sites: skipped without any.
         if (hasVirtualSites)
@@ -167,10 +169,14 @@ void ReferenceRigidBodyState::computeForces(ContextImpl& context, const RigidBod
 
 void ReferenceRigidBodyState::endStep(double stepSize, bool& forcesAreValid) {
     phase([&] { requireFiniteStepResult(); });
+    // A step without a computeForces phase leaves the forces to the next step's start.
+    if (!forcesComputed && hasVirtualSites)
+        stepContext->computeVirtualSites();
     ReferencePlatform::PlatformData& data = platformData(*stepContext);
     data.time += stepSize;
     data.stepCount++;
-    forcesAreValid = true;
+    forcesAreValid = forcesComputed;
+    forcesComputed = false;
     stepContext = nullptr;
 }
 
