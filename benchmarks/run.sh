@@ -38,7 +38,7 @@ if [ "$platform" = CPU ] || [ "$platform" = Reference ]; then
     cat "$out/step_cost-ratios.csv"
     exit
 fi
-speed=("$build/benchmarks/cpp/device_speed" --platform "$platform" --warmup 20 --batch-seconds 0.5)
+speed=("$build/benchmarks/cpp/device_speed" --platform "$platform" --batch-seconds 0.5)
 [ -n "$quick" ] && speed=("$build/benchmarks/cpp/device_speed" --platform "$platform" --small)
 for precision in $precisions; do
     # Bare (the integration's own cost): 512 and 4,096 waters, 9 interleaved batches.

@@ -1,20 +1,9 @@
-/*
- * RigidBodyMinimizer against OpenMM's LocalEnergyMinimizer on one System, from the same
- * start (the rigid integrator's exact body shapes). Driven by ./benchmarks/run.sh validate-minimization
- * (benchmarks/python/suite/minimization.py),
- * which writes the inputs; prints one CSV row per minimizer.
- *
- *   minimize_compare SYSTEM.xml POSITIONS.txt BODIES.txt PLATFORM TOLERANCE NAME [REPEATS=3]
- *
- * POSITIONS.txt: one "x y z" line (nm) per particle. BODIES.txt: one line of particle
- * indices per declared body; empty: every molecule is a body.
- *
- * OpenMM 7.7's LocalEnergyMinimizer reports no iteration count: a second, untimed run
- * counts them from the positions it sets. Within one liblbfgs line search every trial
- * point lies on the line from the search's start; a point off that line starts a new
- * iteration from the last accepted one. (Its spring-tightening restarts add at most two
- * false counts each.) The two runs must end at the same energy for the count to hold.
- */
+// RigidBodyMinimizer against OpenMM's LocalEnergyMinimizer on one System from the same start (the rigid
+// integrator's exact shapes); ./benchmarks/run.sh validate-minimization writes the inputs. One CSV row per minimizer.
+//   minimize_compare SYSTEM.xml POSITIONS.txt BODIES.txt PLATFORM TOLERANCE NAME [REPEATS=3]
+// POSITIONS.txt: "x y z" (nm) per particle; BODIES.txt: particle indices per body, none: every molecule.
+// OpenMM 7.7's LocalEnergyMinimizer reports no iteration count: an untimed second run counts them from the
+// positions it sets (a trial point off the current line search's line starts a new iteration).
 #include "MRattleBuildInfo.h"
 #include "MRattleIntegrator.h"
 #include "RigidBodyMinimizer.h"

@@ -1,33 +1,7 @@
-/*
- * step_cost: wall-clock time of one integration step with forces excluded, on OpenMM's
- * Reference and CPU platforms, for N rigid bodies of k atoms:
- *
- *   verlet             VerletIntegrator, no constraints (the floor: atoms move freely)
- *   mrattle            MRattleIntegrator, bodies declared with addRigidBody
- *   mrattle_allpairs   the same with all k(k-1)/2 intra-body pair constraints declared
- *                      in the System (ignored by M-RATTLE; must cost nothing)
- *   splitting          RigidSplittingIntegrator (the symplectic splitting baseline)
- *   verlet_ccma        VerletIntegrator with 9 of the 10 pair distances of the
- *                      tetrahedral k = 5 body constrained (OpenMM's own way: CCMA)
- *   verlet_settle      VerletIntegrator with the 3 distances of the k = 3 body (a rigid
- *                      water) constrained, which OpenMM integrates with SETTLE
- *
- * The only force is a CustomExternalForce with a zero coefficient on one particle, so the
- * step cost is the integrator's own. Each configuration is timed in `repeats` batches
- * of steps, interleaved across the integrators of one (platform, k, N) so that the ratios
- * of one run see the same machine load; the median per-step time is reported.
- *
- * --threads takes a list: on the CPU platform each count after the first adds runs of
- * verlet, mrattle and splitting with that many threads, timed in the same interleaved
- * batches, and the ratio of their times to the first count's.
- *
- * Usage: step_cost [--out FILE] [--ratios FILE] [--platforms Reference,CPU]
- *                  [--bodies 100,300,1000,3000] [--atoms 3,5,12,30] [--repeats 7]
- *                  [--batch-seconds 0.05] [--threads 1[,2]]
- *                  [--integrators verlet,mrattle,splitting,mrattle_allpairs,verlet_ccma,verlet_settle]
- * Timings go to --out (default stdout) as CSV; the speed-target ratios to --ratios
- * (default stderr) as CSV. Exit status 2 if any run diverged (non-finite state).
- */
+// step_cost: wall-clock time of one integration step with forces excluded (the only force a zero
+// CustomExternalForce), for N rigid bodies of k atoms on Reference and CPU: M-RATTLE and the splitting
+// method against OpenMM's Verlet, SETTLE and CCMA, in interleaved batches so that ratios share the
+// machine's load. Integrators, options and output: docs/benchmarks-cpp.md. Exit 2: a run diverged.
 #include "BenchmarkSupport.h"
 #include "MRattleBuildInfo.h"
 #include "MRattleIntegrator.h"

@@ -12,7 +12,6 @@ Every table and plot in docs/results.md comes from these runs; report.py writes 
 (a partial run replaces only its own sections, stamped).
 """
 import argparse
-import csv
 import os
 import sys
 import time
@@ -56,6 +55,7 @@ def main(argv=None):
     args = parse(argv)
     sys.path[:0] = [os.path.join(args.build, "python"), HERE]
     from suite import accuracy, cost, langevin, long_drift, sampling
+    from suite.common import write_csv
     import report
 
     out = args.out or (os.path.join(args.build, "results-quick") if args.quick else os.path.join(ROOT, "docs"))
@@ -167,21 +167,6 @@ def main(argv=None):
     command = [a for i, a in enumerate(argv) if a != "--build" and (i == 0 or argv[i - 1] != "--build")]
     report.write(path, md, " ".join(command), (time.time() - started) / 60)
     log("wrote %s" % path)
-
-
-def write_csv(path, rows):
-    # Keep plain values; drop live objects (an NVE run's Context and Integrator).
-    plain = (str, int, float, bool, tuple, list, type(None))
-    rows = [{k: v for k, v in r.items() if isinstance(v, plain) or hasattr(v, "dtype")} for r in rows]
-    if not rows:
-        return
-    keys = []
-    for r in rows:  # every column any row has, in first-seen order
-        keys += [k for k in r if k not in keys]
-    with open(path, "w", newline="") as f:
-        w = csv.DictWriter(f, fieldnames=keys, restval="")
-        w.writeheader()
-        w.writerows(rows)
 
 
 if __name__ == "__main__":

@@ -162,7 +162,7 @@ def test_every_method_counts_degrees_of_freedom_with_the_package():
 
 
 def sampled(method, step_fs, potential, se=0.03):
-    kT = thermostats.langevin.KB * thermostats.TEMPERATURE
+    kT = thermostats.KB * thermostats.TEMPERATURE
     return dict(method=method, step_fs=step_fs, ps=20.0, potential_per_molecule=potential,
                 potential_per_molecule_se=se, kinetic_mean=0.5 * 5367 * kT, kinetic_mean_se=1.0)
 

@@ -24,8 +24,7 @@ def _bodies(model):
 def _angular_momentum(state, system):
     x = state.getPositions(asNumpy=True).value_in_unit(unit.nanometer)
     v = state.getVelocities(asNumpy=True).value_in_unit(unit.nanometer / unit.picosecond)
-    m = np.array([system.getParticleMass(i).value_in_unit(unit.dalton) for i in range(system.getNumParticles())])
-    return (m[:, None] * np.cross(x, v)).sum(0)
+    return (common.masses(system)[:, None] * np.cross(x, v)).sum(0)
 
 
 def benzene_start():
@@ -167,9 +166,7 @@ def planar_benzene_with_constraints(total_ps, log):
 
 
 def plot(rows, path, title):
-    import matplotlib
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
+    plt = common.pyplot()
     systems = sorted({r["system"] for r in rows})
     fig, axes = plt.subplots(1, len(systems), figsize=(5.2 * len(systems), 4.2), squeeze=False)
     for ax, system in zip(axes[0], systems):
@@ -188,15 +185,11 @@ def plot(rows, path, title):
         ax.set_title(system)
         ax.legend(fontsize=8)
     fig.suptitle(title)
-    fig.tight_layout()
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
+    common.save_figure(fig, path)
 
 
 def plot_isolated(rows, path):
-    import matplotlib
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
+    plt = common.pyplot()
     fig, axes = plt.subplots(1, 2, figsize=(10, 4))
     for method in ("M-RATTLE", "splitting"):
         pts = sorted((r["step_fs"], r["energy_rel_error"], r["position_error_nm"]) for r in rows if r["method"] == method)
@@ -208,9 +201,7 @@ def plot_isolated(rows, path):
         ax.set_xlabel("step size (fs)")
         ax.legend()
     fig.suptitle("Isolated rigid benzene (free rotor)")
-    fig.tight_layout()
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
+    common.save_figure(fig, path)
 
 
 def ccma_subsets(log):
@@ -278,8 +269,7 @@ def _forward_and_back(system, positions, velocities, method, step_ps, steps, bod
         # OpenMM's VerletIntegrator is leapfrog: it stores v(t - dt/2), so the reversed run
         # must start from -v(t + dt/2) = -(v(t - dt/2) + dt f(t)/m).
         f = state.getForces(asNumpy=True).value_in_unit(unit.kilojoule_per_mole / unit.nanometer)
-        m = np.array([system.getParticleMass(i).value_in_unit(unit.dalton) for i in range(system.getNumParticles())])
-        v = v + step_ps * f / m[:, None]
+        v = v + step_ps * f / common.masses(system)[:, None]
     context.setVelocities(-v)
     integrator.step(steps)
     x = context.getState(getPositions=True).getPositions(asNumpy=True).value_in_unit(unit.nanometer)

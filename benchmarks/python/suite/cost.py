@@ -3,6 +3,7 @@ import csv
 import io
 import subprocess
 
+from . import common
 
 
 def run_step_cost(binary, platforms, bodies, atoms, repeats, batch_seconds, log, threads=(1,)):
@@ -29,9 +30,7 @@ def _csv_part(text):
 
 
 def plot(timings, path):
-    import matplotlib
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
+    plt = common.pyplot()
     key_time = _time_key(timings)
     platforms = sorted({r["platform"] for r in timings})
     fig, axes = plt.subplots(1, len(platforms), figsize=(5.5 * len(platforms), 4.2), squeeze=False)
@@ -47,9 +46,7 @@ def plot(timings, path):
         ax.set_ylabel("time per step (microseconds, median)")
         ax.set_title(platform)
         ax.legend(fontsize=8)
-    fig.tight_layout()
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
+    common.save_figure(fig, path)
 
 
 def _time_key(timings):

@@ -26,9 +26,8 @@ import numpy as np
 import openmm
 from openmm import unit
 
-import mrattle
-
-from . import common, langevin
+from .common import block_mean, equilibrate, masses as masses_of, platform, removes_cm, temperatures, water, \
+    water_integrator
 
 MODELS = (('TIP3P', 'tip3p.pdb', 'amber14/tip3p.xml'), ('SPC/E', 'spce.pdb', 'amber14/spce.xml'))
 NVE_STEPS_FS = (0.5, 1, 2, 3, 4)
@@ -37,38 +36,7 @@ METHODS = ('M-RATTLE', 'Verlet + SETTLE')
 THERMOSTATS = ('M-RATTLE Nose-Hoover chain', 'M-RATTLE CSVR')  # thermostats.METHODS' names
 THERMOSTAT_STEPS_FS = (0.5, 1, 2, 3, 4, 5)
 THERMOSTAT_MODELS = ('TIP3P',)  # issue 33's validation system
-TEMPERATURE = 300.0
 BLOCKS = 10
-
-
-def equilibrate(system, positions, ps, threads, seed=11):
-    """LangevinMiddle + SETTLE at 300 K, 1/ps, 2 fs: the start of every run of this model. Under a
-    barostat the System's default box becomes the one reached, so that runs start in it."""
-    integrator = openmm.LangevinMiddleIntegrator(TEMPERATURE * unit.kelvin, 1 / unit.picosecond, 2 * unit.femtoseconds)
-    integrator.setRandomNumberSeed(seed)
-    context = openmm.Context(system, integrator, *common.platform('CPU', threads))
-    context.setPositions(positions)
-    context.setVelocitiesToTemperature(TEMPERATURE * unit.kelvin, seed)
-    integrator.step(int(round(ps / 0.002)))
-    state = context.getState(getPositions=True, getVelocities=True)
-    system.setDefaultPeriodicBoxVectors(*state.getPeriodicBoxVectors())
-    return state.getPositions(asNumpy=True), state.getVelocities(asNumpy=True)
-
-
-def make_integrator(method, step_fs):
-    step = step_fs * unit.femtoseconds
-    if method == 'M-RATTLE':
-        return mrattle.MRattleIntegrator(step)
-    if method == 'M-RATTLE Langevin':
-        integrator = mrattle.MRattleLangevinIntegrator(TEMPERATURE * unit.kelvin, 1 / unit.picosecond, step)
-        integrator.setRandomNumberSeed(5)
-        return integrator
-    if method == 'Verlet + SETTLE':
-        return openmm.VerletIntegrator(step)
-    if method in THERMOSTATS:
-        from . import thermostats  # here: thermostats imports this module
-        return thermostats.make_integrator(method, step_fs)
-    raise ValueError('unknown method %r' % method)
 
 
 def against_published(result):
@@ -90,33 +58,11 @@ LENGTHS = (2.0, 0.3, 2.5, 10)
 MOLECULES = 895  # waters in each of OpenMM's tip3p.pdb and spce.pdb (for reporting kept rows)
 
 
-def rigid_split(velocities, positions, masses, bodies, project=True):
-    """Translational and rotational kinetic energy of the bodies (kJ/mol): each body's velocities
-    made rigid at the positions first (the mass-weighted projection, RATTLE's velocity step: the
-    identity for velocities that are rigid already), then 1/2 M V^2 and sum m |v - V|^2 / 2, the
-    formula RigidBodyIntegrator.computeTranslationalKineticEnergy() uses (project=False: that
-    formula on the velocities as they are). Bodies of equal size."""
-    index = np.asarray(bodies)
-    m = masses[index]
-    mass = m.sum(axis=1)
-    x, v = positions[index], velocities[index]
-    center = (m[..., None] * x).sum(axis=1) / mass[:, None]
-    V = (m[..., None] * v).sum(axis=1) / mass[:, None]
-    a = x - center[:, None, :]
-    L = (m[..., None] * np.cross(a, v - V[:, None, :])).sum(axis=1)
-    J = np.einsum('bk,bki,bkj->bij', m, a, a)
-    inertia = np.trace(J, axis1=1, axis2=2)[:, None, None] * np.eye(3) - J
-    omega = np.linalg.solve(inertia, L[..., None])[..., 0]
-    relative = np.cross(omega[:, None, :], a) if project else v - V[:, None, :]
-    return 0.5 * np.sum(mass * (V * V).sum(axis=1)), 0.5 * np.sum(m * (relative * relative).sum(axis=2))
-
-
 def summarize(model, method, step_fs, trans, rot, times, energy, failure, wall, steps, molecules):
     result = dict(model=model, method=method, step_fs=step_fs, failure=failure, wall_s=wall, steps=steps)
     if failure is None:
-        result['Ttrans'] = langevin.block_mean(trans, BLOCKS)
-        result['Trot'] = langevin.block_mean(rot, BLOCKS)
-        result['difference'] = langevin.block_mean(np.asarray(rot) - np.asarray(trans), BLOCKS)
+        result['Ttrans'], result['Trot'] = block_mean(trans, BLOCKS), block_mean(rot, BLOCKS)
+        result['difference'] = block_mean(np.asarray(rot) - np.asarray(trans), BLOCKS)
         slope = np.polyfit(times, energy, 1)[0] if len(times) > 1 else float('nan')
         result['drift'] = slope * 1000 / molecules  # kJ/mol per ns per molecule
     return result
@@ -127,13 +73,11 @@ def run_one(model, system, bodies, start, method, step_fs, discard_ps, productio
     drift (a thermostat's: of the energy plus its heat bath's, the quantity it conserves). VerletIntegrator is leapfrog: its State velocities are half a step behind; its on-step
     velocities are v + (h/2) f/m made rigid (velocity Verlet's, i.e. RATTLE's), and a second
     result gives the State velocities as they are."""
-    integrator = make_integrator(method, step_fs)
-    context = openmm.Context(system, integrator, *common.platform('CPU', threads))
+    integrator = water_integrator(method, step_fs)
+    context = openmm.Context(system, integrator, *platform('CPU', threads))
     context.setPositions(start[0])
     context.setVelocities(start[1])
-    masses = np.array([system.getParticleMass(i).value_in_unit(unit.dalton) for i in range(system.getNumParticles())])
-    removes_cm = any(isinstance(f, openmm.CMMotionRemover) for f in system.getForces())
-    dof_trans, dof_rot = 3 * len(bodies) - (3 if removes_cm else 0), 3 * len(bodies)
+    masses, cm = masses_of(system), removes_cm(system)
     leapfrog = method == 'Verlet + SETTLE'
     bath = getattr(integrator, 'computeHeatBathEnergy', lambda: 0 * unit.kilojoule_per_mole)
     stride = max(1, int(round(sample_fs / step_fs)))
@@ -150,18 +94,18 @@ def run_one(model, system, bodies, start, method, step_fs, discard_ps, productio
             v = state.getVelocities(asNumpy=True).value_in_unit(unit.nanometers / unit.picosecond)
             x = state.getPositions(asNumpy=True).value_in_unit(unit.nanometers)
             if leapfrog:
-                kt, kr = rigid_split(v, x, masses, bodies, project=False)
-                series['halfTrans'].append(2 * kt / (dof_trans * langevin.KB))
-                series['halfRot'].append(2 * kr / (dof_rot * langevin.KB))
+                tt, tr = temperatures(v, masses, bodies, cm)
+                series['halfTrans'].append(tt)
+                series['halfRot'].append(tr)
                 f = state.getForces(asNumpy=True).value_in_unit(unit.kilojoules_per_mole / unit.nanometer)
                 v = v + 0.5 * h * f / masses[:, None]
-            kt, kr = rigid_split(v, x, masses, bodies)
-            series['trans'].append(2 * kt / (dof_trans * langevin.KB))
-            series['rot'].append(2 * kr / (dof_rot * langevin.KB))
+            tt, tr = temperatures(v, masses, bodies, cm, x)
+            series['trans'].append(tt)
+            series['rot'].append(tr)
             series['time'].append(state.getTime().value_in_unit(unit.picosecond))
             series['energy'].append((state.getKineticEnergy() + state.getPotentialEnergy() + bath()).value_in_unit(
                 unit.kilojoule_per_mole))
-            if not math.isfinite(series['energy'][-1] + kt + kr):
+            if not math.isfinite(series['energy'][-1] + tt + tr):
                 raise ArithmeticError('energy not finite at %.2f ps' % series['time'][-1])
     except Exception as error:  # a blow-up ends the run and is reported
         failure = str(error).splitlines()[0]
@@ -217,7 +161,7 @@ def run_model(task):
     def log(message):
         print('[%6.0f s] equipartition: %s' % (time.time() - began, message), file=sys.stderr, flush=True)
 
-    system, positions, bodies = langevin.water(pdb_name, forcefield_name)
+    system, positions, bodies = water(pdb_name, forcefield_name)
     start = equilibrate(system, positions, equilibrate_ps, threads)
     log('%s, %d waters, equilibrated %.1f ps' % (name, len(bodies), equilibrate_ps))
     runs = model_runs(name, methods)

@@ -21,6 +21,8 @@ import math
 import os
 import sys
 
+from . import common
+
 root = os.path.dirname(os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__)))))  # three below
 
 
@@ -119,9 +121,7 @@ def main(argv=None):
                                   *stats['openmm_energy'], *stats['gap'], lower, len(mine),
                                   stats['rigid_rms_force'][0], *stats['openmm_rms_force'], *stats['matched_gap']))
 
-    import matplotlib
-    matplotlib.use('Agg')
-    import matplotlib.pyplot as plt
+    plt = common.pyplot()
     fig, ax = plt.subplots(figsize=(6, 4.2))
     tolerances = [t for t, _ in summary]
     for key, label in (('rigid_energy', 'RigidBodyMinimizer'), ('openmm_energy', 'LocalEnergyMinimizer (SETTLE)')):

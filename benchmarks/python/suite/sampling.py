@@ -5,8 +5,7 @@ from openmm import unit
 
 import mrattle
 from . import common, stats
-
-KB = 0.00831446261815324  # kJ/mol/K
+from .common import KB
 LABELS = {"temperature": "temperature (6N DOF)", "radius": "farthest molecule from the centre of mass (nm)"}
 
 
@@ -164,9 +163,7 @@ def compare(results):
 
 
 def plot(results, path):
-    import matplotlib
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
+    plt = common.pyplot()
     fig, axes = plt.subplots(1, 3, figsize=(15, 4.2))
     for method, r in results.items():
         axes[0].hist(np.concatenate(r["temperature"]), bins=30, density=True, histtype="step", lw=1.5, label=method)
@@ -182,6 +179,4 @@ def plot(results, path):
     for ax in axes:
         ax.legend(fontsize=8)
     fig.suptitle("27 rigid benzene molecules, NVE: M-RATTLE vs splitting")
-    fig.tight_layout()
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
+    common.save_figure(fig, path)
