@@ -2,28 +2,51 @@
 // boxes, ns/day with PME and the integration's own cost; options and output in docs/benchmarks-cpp.md.
 // C++ so that it runs where there is no Python OpenMM. Exit 2: a run diverged or lost its geometry;
 // 3: the platform or the plugin's kernels on it are not there.
-#include "BenchmarkSupport.h"
 #include "MRattleBuildInfo.h"
 #include "MRattleIntegrator.h"
 #include "MRattleLangevinIntegrator.h"
 #include "OpenMM.h"
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <cstdlib>
+#include <fstream>
 #include <iomanip>
 #include <iostream>
 #include <map>
 #include <memory>
 #include <random>
+#include <sstream>
 #include <string>
 #include <vector>
 
 using namespace OpenMM;
 using std::string;
 using std::vector;
-using namespace MRattleBenchmark;
 
 namespace {
+
+using Clock = std::chrono::steady_clock;
+
+double secondsSince(Clock::time_point start) {
+    return std::chrono::duration<double>(Clock::now() - start).count();
+}
+
+double median(vector<double> values) {
+    std::sort(values.begin(), values.end());
+    const size_t n = values.size();
+    return n % 2 == 1 ? values[n / 2] : 0.5 * (values[n / 2 - 1] + values[n / 2]);
+}
+
+/** The items of a comma-separated option value. */
+vector<string> split(const string& text) {
+    vector<string> parts;
+    std::stringstream stream(text);
+    for (string part; std::getline(stream, part, ',');)
+        if (!part.empty())
+            parts.push_back(part);
+    return parts;
+}
 
 struct Options {
     string platform = "CUDA", precision = "mixed", out, ratios;
@@ -54,8 +77,11 @@ Options parse(int argc, char** argv) {
             options.platform = value;
         else if (flag == "--precision")
             options.precision = value;
-        else if (flag == "--waters-per-side")
-            options.watersPerSide = splitInts(value);
+        else if (flag == "--waters-per-side") {
+            options.watersPerSide.clear();
+            for (const string& part : split(value))
+                options.watersPerSide.push_back(std::stoi(part));
+        }
         else if (flag == "--repeats")
             options.repeats = std::stoi(value);
         else if (flag == "--batch-seconds")
@@ -309,9 +335,16 @@ int main(int argc, char** argv) {
                       << " (give their library with --plugins)\n";
             return 3;
         }
-        CsvOutputs csv(options.out, options.ratios);
-        std::ostream& out = csv.out;
-        std::ostream& ratios = csv.ratios;
+        // Timings to --out (default stdout), the targets to --ratios (default stderr).
+        std::ofstream outFile, ratiosFile;
+        if (!options.out.empty())
+            outFile.open(options.out);
+        if (!options.ratios.empty())
+            ratiosFile.open(options.ratios);
+        std::ostream& out = options.out.empty() ? std::cout : outFile;
+        std::ostream& ratios = options.ratios.empty() ? std::cerr : ratiosFile;
+        if (!out || !ratios)
+            throw std::runtime_error("cannot write " + options.out + " or " + options.ratios);
         out << "platform,device,precision,system,waters,atoms,integrator,steps_per_batch,batches,sync_ms,"
                "median_ms_per_step,min_ms_per_step,max_ms_per_step,ns_per_day,geometry_error_nm,finite\n";
         ratios << "system,atoms,measure,value,target,met,paired_ratio,ci95_low,ci95_high\n";

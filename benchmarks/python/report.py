@@ -150,7 +150,7 @@ def reversibility_section(rows, step_counts):
 
 def cost_section(timings, ratios, paper_rows):
     md = ["\n## Cost per step, forces excluded\n"]
-    md.append("From `benchmarks/cpp/step_cost` (C++; see docs/benchmarks-cpp.md): N rigid bodies of k atoms whose only "
+    md.append("From `benchmarks/python/suite/cost.py` (docs/benchmarks.md): N rigid bodies of k atoms whose only "
               "force is a zero-strength external force, velocities at 300 K; median time per step of interleaved "
               "batches (CPU platform with one thread unless `threads` says 2). `verlet` is OpenMM's "
               "VerletIntegrator with no constraints (the floor), `verlet_settle` the same with each 3-atom body's "
@@ -158,7 +158,7 @@ def cost_section(timings, ratios, paper_rows):
               "per 5-atom body (OpenMM's CCMA, given the angles it needs), `mrattle_allpairs` M-RATTLE with all 10 "
               "pair constraints declared inside each body.\n")
     md.append("Every ratio, against its target where it has one (`met` is `-` where it has none; the reasons for "
-              "the targets missed: docs/benchmarks-cpp.md):\n")
+              "the targets missed: docs/benchmarks.md):\n")
     md.append(table(ratios, [(k, k) for k in ratios[0].keys()]) if ratios else "(no ratios)\n")
     md.append("All timings (microseconds per step):\n")
     keep = [k for k in timings[0].keys() if k in ("platform", "integrator", "threads", "atoms_per_body", "bodies",
