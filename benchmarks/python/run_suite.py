@@ -21,8 +21,8 @@ ROOT = os.path.dirname(os.path.dirname(HERE))
 TARGETS = {"paper": ("accuracy", "cost", "sampling", "drift"),
            "validate-langevin": ("langevin",), "validate-equipartition": ("equipartition",),
            "validate-thermostats": ("thermostats",)}
-STUDIES = {"validate-minimization": "minimization", "validate-minimization-starts": "minimization_starts",
-           "validate-far-shapes": "far_shapes"}  # modules of suite/ with a main(argv) of their own
+STUDIES = {"validate-minimization": ("minimization", "compare"),  # suite modules' functions of argv
+           "validate-minimization-starts": ("minimization", "starts"), "validate-far-shapes": ("far_shapes", "main")}
 
 
 def parse(argv):
@@ -50,8 +50,9 @@ def main(argv=None):
         rest = [a for i, a in enumerate(argv[1:], 1) if a != "--build" and (i < 2 or argv[i - 1] != "--build")]
         sys.path[:0] = [os.path.join(build, "python"), HERE]
         import importlib
-        study = importlib.import_module("suite." + STUDIES[argv[0]])
-        return study.main(rest + (["--build", build] if "minimization" in argv[0] else []))
+        module, function = STUDIES[argv[0]]
+        return getattr(importlib.import_module("suite." + module), function)(
+            rest + (["--build", build] if module == "minimization" else []))
     args = parse(argv)
     sys.path[:0] = [os.path.join(args.build, "python"), HERE]
     from suite import accuracy, cost, langevin, long_drift, sampling
@@ -80,9 +81,8 @@ def main(argv=None):
         write_csv(os.path.join(results_dir, "cost_step_times.csv"), timings)
         write_csv(os.path.join(results_dir, "cost_ratios.csv"), ratios)
         cost.plot(timings, os.path.join(results_dir, "cost_step_times.png"))
-        from suite import paper_cost
         log("cost: the paper's systems (one benzene, the 27-benzene cluster), forces included")
-        prows = paper_cost.compare(["Reference", "CPU"], 7 if not q else 1, 0.2 if not q else 0.01, log)
+        prows = cost.paper_systems(["Reference", "CPU"], 7 if not q else 1, 0.2 if not q else 0.01, log)
         write_csv(os.path.join(results_dir, "cost_paper_systems.csv"), prows)
         md += report.cost_section(timings, ratios, prows)
 

@@ -143,6 +143,36 @@ def run(platforms, body_counts, atoms, repeats, batch_seconds, log, threads=(1,)
     return timings, ratios
 
 
+def paper_systems(platforms, batches, batch_seconds, log):
+    """Median time per 2 fs step of M-RATTLE and the splitting method on the paper's systems, forces included
+    (one rigid benzene, the 27-benzene cluster; the CPU platform with one thread), interleaved batches."""
+    from openmm import unit
+    rows = []
+    for label, model in (("isolated benzene", mrattle.models.benzene()),
+                         ("27-benzene cluster", mrattle.models.benzeneCluster(temperature=250 * unit.kelvin, seed=1))):
+        bodies = common.benzene_bodies(model.system.getNumParticles())
+        x = np.array(model.positions.value_in_unit(unit.nanometer))
+        v = common.rigid_velocities(model.system, x, bodies, 300.0, seed=2)
+        for platform_name in platforms:
+            runs, contexts, steps = {}, [], {}
+            for method in ("M-RATTLE", "splitting"):
+                runs[method] = integrator = common.make_integrator(method, 2 * common.FS, bodies=bodies)
+                contexts.append(openmm.Context(model.system, integrator, *common.platform(platform_name, 1)))
+                contexts[-1].setPositions(x)
+                contexts[-1].setVelocities(v)
+                integrator.step(10)
+                start = time.perf_counter()
+                integrator.step(20)
+                steps[method] = max(1, int(batch_seconds / max((time.perf_counter() - start) / 20, 1e-9)))
+            per_step = common.interleaved_median(runs, steps, batches)
+            rows += [{"system": label, "platform": platform_name, "method": m, "us_per_step": per_step[m] * 1e6}
+                     for m in runs]
+            log("  %-20s %-9s M-RATTLE %.1f us/step, splitting %.1f us/step (ratio %.2f)" % (
+                label, platform_name, rows[-2]["us_per_step"], rows[-1]["us_per_step"],
+                rows[-2]["us_per_step"] / rows[-1]["us_per_step"]))
+    return rows
+
+
 def plot(timings, path):
     plt = common.pyplot()
     platforms = sorted({r["platform"] for r in timings})

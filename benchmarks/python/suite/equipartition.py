@@ -1,20 +1,7 @@
-"""Equipartition of rigid water between translation and rotation against the step size (issue 24).
-
-NVE runs of OpenMM's rigid TIP3P box (app/data/tip3p.pdb) and rigid SPC/E box (app/data/spce.pdb),
-from one equilibrated start per model (LangevinMiddle + SETTLE at 300 K), with MRattleIntegrator
-beside VerletIntegrator with SETTLE at 0.5, 1, 2, 3 and 4 fs, MRattleLangevinIntegrator at 2 and
-4 fs, and (TIP3P) the thermostats of issue 33, MRattleNoseHooverIntegrator and MRattleBussiIntegrator
-(suite/thermostats.py's settings), at 0.5 to 5 fs. The translational and rotational temperatures of every run come from the same formula
-(rigid_split: 1/2 M V^2 per molecule, the rest of its kinetic energy rotational, the
-CMMotionRemover's 3 degrees of freedom taken from the translations), on the on-step velocities of
-each integrator (for OpenMM's leapfrog VerletIntegrator rebuilt from its half-step ones), means and
-standard errors from block averages. Asthagiri & Beck (2024) found that NVE rigid SPC/E water reaches equipartition only
-at 0.5 fs, with the rotational temperature below the translational at 1-3 fs.
-
-    ./benchmarks/run.sh validate-equipartition
-    # the thermostats' rows alone, merged into docs/results/equipartition.csv and its section:
-    ./benchmarks/run.sh validate-thermostats --study equipartition
-"""
+"""`./benchmarks/run.sh validate-equipartition`: translational against rotational temperature of rigid TIP3P
+and SPC/E water against the step size, NVE with MRattleIntegrator and Verlet + SETTLE, MRattleLangevinIntegrator,
+and (TIP3P; `validate-thermostats --study equipartition`) the thermostats; against Asthagiri & Beck (2024), who
+found NVE rigid SPC/E at equipartition only at 0.5 fs, T_rot below T_trans at 1-3 fs (the method: report())."""
 import csv
 import math
 import multiprocessing

@@ -1,24 +1,8 @@
-"""Validation of MRattleNoseHooverIntegrator and MRattleBussiIntegrator (issue 33) on rigid
-TIP3P water (openmm/app/data/tip3p.pdb, amber14/tip3p.xml, PME 0.9 nm, 895 waters, CPU platform).
-
-From one start (LangevinMiddle + SETTLE at 300 K), each method runs at 300 K:
-1. production at 2 fs with M-RATTLE NVE, the Nose-Hoover chain (10/ps), CSVR (10/ps) and
-   LangevinMiddleIntegrator + SETTLE (1/ps): the kinetic energy's mean and variance against the
-   canonical values for N = 6 * 895 - 3 degrees of freedom (mean N kT/2, variance N (kT)^2/2),
-   the potential energy per molecule, the translational and rotational temperatures, and the
-   self-diffusion coefficient (oxygen mean-squared displacement);
-2. short runs at 0.5, 1, 3, 4 and 5 fs (2 fs from 1.) of the three M-RATTLE methods: the
-   conserved quantity's drift (kinetic + potential + the heat bath's energy; NVE's total
-   energy) and the translational and rotational temperatures (on-step velocities).
-Means carry standard errors from 10 block averages; a variance's error comes from the block
-variances. `./benchmarks/run.sh validate-thermostats` (validate(), below).
-
-Follow-up studies (run with --study, reported in the same section when their CSVs
-lie beside the main one): the potential energy per water at smaller steps beside LangevinMiddle + SETTLE
-(run_step_sizes: is the 2-fs difference a step-size error?), and the density under a MonteCarloBarostat
-(run_density). The translational and rotational temperatures against the step are in the equipartition
-table (suite/equipartition.py runs the two thermostats for TIP3P).
-"""
+"""`./benchmarks/run.sh validate-thermostats`: MRattleNoseHooverIntegrator and MRattleBussiIntegrator on rigid
+TIP3P water from one start, beside NVE and LangevinMiddle + SETTLE: canonical kinetic energy, potential energy,
+diffusion at 2 fs and the conserved quantity's drift at 0.5-5 fs (the method: report()). Follow-up studies
+(--study): the potential energy at smaller steps (is the 2-fs difference a step-size error?) and the density
+under a barostat, reported in the same section when their CSVs lie beside the main one."""
 import os
 import math
 import time
