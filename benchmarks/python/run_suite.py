@@ -5,7 +5,7 @@
     validate-langevin       MRattleLangevinIntegrator against LangevinMiddle + SETTLE (also docs/results/langevin.md)
     validate-equipartition  rigid water, translational against rotational temperature
     validate-thermostats    Nose-Hoover chain and CSVR on rigid water [--study step-sizes|density|equipartition]
-    validate-minimization, validate-minimization-starts, validate-far-shapes   studies with options of their own
+    validate-minimization, validate-minimization-starts   studies with options of their own
 
 --quick: tiny runs written to a scratch folder (a smoke test); --only: some parts of a target.
 Every table and plot in docs/results.md comes from these runs; report.py writes the markdown
@@ -21,8 +21,7 @@ ROOT = os.path.dirname(os.path.dirname(HERE))
 TARGETS = {"paper": ("accuracy", "cost", "sampling", "drift"),
            "validate-langevin": ("langevin",), "validate-equipartition": ("equipartition",),
            "validate-thermostats": ("thermostats",)}
-STUDIES = {"validate-minimization": ("minimization", "compare"),  # suite modules' functions of argv
-           "validate-minimization-starts": ("minimization", "starts"), "validate-far-shapes": ("far_shapes", "main")}
+STUDIES = {"validate-minimization": "compare", "validate-minimization-starts": "starts"}  # of suite/minimization.py
 
 
 def parse(argv):
@@ -49,10 +48,8 @@ def main(argv=None):
         build = argv[argv.index("--build") + 1] if "--build" in argv else os.path.join(ROOT, "build")
         rest = [a for i, a in enumerate(argv[1:], 1) if a != "--build" and (i < 2 or argv[i - 1] != "--build")]
         sys.path[:0] = [os.path.join(build, "python"), HERE]
-        import importlib
-        module, function = STUDIES[argv[0]]
-        return getattr(importlib.import_module("suite." + module), function)(
-            rest + (["--build", build] if module == "minimization" else []))
+        from suite import minimization
+        return getattr(minimization, STUDIES[argv[0]])(rest + ["--build", build])
     args = parse(argv)
     sys.path[:0] = [os.path.join(args.build, "python"), HERE]
     from suite import accuracy, cost, langevin, long_drift, sampling
