@@ -260,20 +260,6 @@ int main(int argc, char** argv) {
         print(name, mine, "");
         print(name, openmm, same ? "iterations counted in a second run that ended at the same energy"
                                  : "iterations counted in a second run that ended ELSEWHERE: count not valid");
-        // One evaluation's Context work (setPositions, virtual sites, forces and energy) in the
-        // two Contexts, alternated so that a change of machine load hits both alike.
-        double rigidSeconds = 0, flexibleSeconds = 0;
-        for (int k = 0; k < 10; k++)
-            for (Context* c : {&rigid, &flexible}) {
-                const auto t = Clock::now();
-                c->setPositions(start);
-                c->computeVirtualSites();
-                c->getState(State::Forces | State::Energy, false, c->getIntegrator().getIntegrationForceGroups());
-                (c == &rigid ? rigidSeconds : flexibleSeconds) += std::chrono::duration<double>(Clock::now() - t).count();
-            }
-        std::printf("# %s: one evaluation's Context work, alternated 10 times: MRattleIntegrator's Context / "
-                    "VerletIntegrator's = %.3f (%.2f ms / %.2f ms)\n", name.c_str(), rigidSeconds / flexibleSeconds,
-                    rigidSeconds * 100, flexibleSeconds * 100);
         if (mine.iterations > 0 && openmm.iterations > 0)
             std::printf("# %s: cost per iteration, RigidBodyMinimizer / LocalEnergyMinimizer = %.3f; per evaluation "
                         "%.3f\n", name.c_str(), (mine.seconds / mine.iterations) / (openmm.seconds / openmm.iterations),

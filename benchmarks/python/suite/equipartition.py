@@ -2,7 +2,6 @@
 and SPC/E water against the step size, NVE with MRattleIntegrator and Verlet + SETTLE, MRattleLangevinIntegrator,
 and (TIP3P; `validate-thermostats --study equipartition`) the thermostats; against Asthagiri & Beck (2024), who
 found NVE rigid SPC/E at equipartition only at 0.5 fs, T_rot below T_trans at 1-3 fs (the method: report())."""
-import csv
 import math
 import multiprocessing
 import os
@@ -13,8 +12,8 @@ import numpy as np
 import openmm
 from openmm import unit
 
-from .common import block_mean, equilibrate, masses as masses_of, platform, removes_cm, temperatures, water, \
-    water_integrator
+from .common import (block_mean, equilibrate, masses as masses_of, platform, read_csv, removes_cm, temperatures, water,
+                     water_integrator, write_csv)
 
 MODELS = (('TIP3P', 'tip3p.pdb', 'amber14/tip3p.xml'), ('SPC/E', 'spce.pdb', 'amber14/spce.xml'))
 NVE_STEPS_FS = (0.5, 1, 2, 3, 4)
@@ -29,9 +28,9 @@ BLOCKS = 10
 def against_published(result):
     """How a run compares with Asthagiri & Beck (2024): equipartition at 0.5 fs, T_rot < T_trans at 1-3 fs."""
     step = result['step_fs']
-    if result['failure'] is not None or step > 3:
+    if result.get('failure') or step > 3:
         return ''
-    d, e = result['difference']
+    d, e = result['Trot_minus_Ttrans'], result['difference_se']
     below, equal = d < -3 * e, abs(d) <= 3 * e
     if step == 0.5:
         return ' (consistent with it)' if equal else ' (differs from it)'
@@ -46,12 +45,15 @@ MOLECULES = 895  # waters in each of OpenMM's tip3p.pdb and spce.pdb (for report
 
 
 def summarize(model, method, step_fs, trans, rot, times, energy, failure, wall, steps, molecules):
-    result = dict(model=model, method=method, step_fs=step_fs, failure=failure, wall_s=wall, steps=steps)
+    """A run's row: T_trans, T_rot and their difference (block-averaged as one series: the two are
+    anticorrelated in NVE) with standard errors, and the energy's drift (kJ/mol per ns per molecule)."""
+    result = dict(model=model, method=method, step_fs=step_fs, failure=failure or '', wall_s=round(wall), steps=steps)
     if failure is None:
-        result['Ttrans'], result['Trot'] = block_mean(trans, BLOCKS), block_mean(rot, BLOCKS)
-        result['difference'] = block_mean(np.asarray(rot) - np.asarray(trans), BLOCKS)
-        slope = np.polyfit(times, energy, 1)[0] if len(times) > 1 else float('nan')
-        result['drift'] = slope * 1000 / molecules  # kJ/mol per ns per molecule
+        result['Ttrans'], result['Ttrans_se'] = block_mean(trans, BLOCKS)
+        result['Trot'], result['Trot_se'] = block_mean(rot, BLOCKS)
+        result['Trot_minus_Ttrans'], result['difference_se'] = block_mean(np.asarray(rot) - np.asarray(trans), BLOCKS)
+        result['drift_kJ_per_mol_ns_molecule'] = (np.polyfit(times, energy, 1)[0] if len(times) > 1
+                                                  else float('nan')) * 1000 / molecules
     return result
 
 
@@ -108,9 +110,9 @@ def run_one(model, system, bodies, start, method, step_fs, discard_ps, productio
 
 def verdict(result):
     """What the error bars support about T_rot - T_trans (3 standard errors)."""
-    if result['failure'] is not None:
+    if result.get('failure'):
         return 'unstable: ' + result['failure']
-    d, e = result['difference']
+    d, e = result['Trot_minus_Ttrans'], result['difference_se']
     if abs(d) <= 3 * e:
         return 'equal within 3 SE (%+.1f +- %.1f K)' % (d, e)
     return 'rotational %s translational by %.1f +- %.1f K (%.0f SE)' % ('below' if d < 0 else 'above', abs(d), e,
@@ -119,13 +121,6 @@ def verdict(result):
 
 CSV_COLUMNS = ['model', 'method', 'step_fs', 'Ttrans', 'Ttrans_se', 'Trot', 'Trot_se', 'Trot_minus_Ttrans',
                'difference_se', 'drift_kJ_per_mol_ns_molecule', 'failure', 'steps', 'wall_s']
-
-
-def csv_row(r):
-    ok = r['failure'] is None
-    return [r['model'], r['method'], '%g' % r['step_fs']] + \
-        ([r['Ttrans'][0], r['Ttrans'][1], r['Trot'][0], r['Trot'][1], r['difference'][0], r['difference'][1],
-          r['drift']] if ok else [''] * 7) + [r['failure'] or '', r['steps'], '%.0f' % r['wall_s']]
 
 
 def model_runs(name, methods=None):
@@ -140,8 +135,8 @@ def model_runs(name, methods=None):
 
 
 def run_model(task):
-    """All runs of one model (in a process of its own), each appended to a partial CSV as it ends."""
-    name, pdb_name, forcefield_name, lengths, threads, partial, methods = task
+    """All runs of one model, in a process of its own."""
+    name, pdb_name, forcefield_name, lengths, threads, methods = task
     equilibrate_ps, discard_ps, production_ps, sample_fs = lengths
     began = time.time()
 
@@ -151,33 +146,22 @@ def run_model(task):
     system, positions, bodies = water(pdb_name, forcefield_name)
     start = equilibrate(system, positions, equilibrate_ps, threads)
     log('%s, %d waters, equilibrated %.1f ps' % (name, len(bodies), equilibrate_ps))
-    runs = model_runs(name, methods)
     rows = []
-    with open(partial, 'w', newline='') as stream:
-        csv.writer(stream).writerow(CSV_COLUMNS)
-    for method, step in runs:
-        for result in run_one(name, system, bodies, start, method, step, discard_ps, production_ps, sample_fs,
-                              threads):
-            log('%s %-17s %.1f fs: %s (%d steps in %.0f s)' % (name, result['method'], step, verdict(result),
-                                                                result['steps'], result['wall_s']))
-            rows.append(result)
-            with open(partial, 'a', newline='') as stream:
-                csv.writer(stream).writerow(csv_row(result))
+    for method, step in model_runs(name, methods):
+        rows += run_one(name, system, bodies, start, method, step, discard_ps, production_ps, sample_fs, threads)
+        log('%s %-17s %.1f fs: %s (%d steps in %.0f s)' % (name, method, step, verdict(rows[-1]), rows[-1]['steps'],
+                                                            rows[-1]['wall_s']))
     return len(bodies), rows
 
 
 def run(quick, out, log, threads=1, methods=None):
-    """Run every model and step size, the two models in two processes of one CPU thread each (on a
-    shared machine two single-thread processes lose less to waiting than one of two threads);
-    write out + '.csv'; return the report as markdown lines. Each model's runs are also appended
-    to out + '.partial-<model>.csv' as they end (removed at the end), so a run cut short keeps
-    what it has. With `methods`, only their runs (of the models that have them) are made, and they
-    replace their own rows in an existing out + '.csv', whose other rows are kept and reported."""
+    """Every model and step size, the two models in two processes of one CPU thread each (on a shared
+    machine two single-thread processes lose less to waiting than one of two threads); writes out + '.csv',
+    returns the report as markdown lines. With `methods`, only their runs are made, and they replace their
+    own rows in an existing out + '.csv', whose other rows are kept and reported."""
     lengths = (0.02, 0.01, 0.04, 4) if quick else LENGTHS
-    os.makedirs(os.path.dirname(os.path.abspath(out)), exist_ok=True)
-    tasks = [(name, pdb_name, forcefield_name, lengths, threads,
-              '%s.partial-%s.csv' % (out, name.replace('/', '')), methods)
-             for name, pdb_name, forcefield_name in MODELS if model_runs(name, methods)]
+    tasks = [(name, pdb, forcefield, lengths, threads, methods) for name, pdb, forcefield in MODELS
+             if model_runs(name, methods)]
     began = time.time()
     with multiprocessing.get_context('spawn').Pool(len(tasks)) as pool:
         results = pool.map(run_model, tasks)
@@ -186,16 +170,10 @@ def run(quick, out, log, threads=1, methods=None):
     rows = [row for result in results for row in result[1]]
     if methods is not None and os.path.exists(out + '.csv'):
         made = {(r['model'], r['method'], r['step_fs']) for r in rows}
-        kept = [r for r in rows_from_csv(out + '.csv') if (r['model'], r['method'], r['step_fs']) not in made]
+        kept = [r for r in read_csv(out + '.csv') if (r['model'], r['method'], r['step_fs']) not in made]
         rows = kept + rows
         by_model.update({r['model']: by_model.get(r['model'], MOLECULES) for r in kept})
-    with open(out + '.csv', 'w', newline='') as stream:
-        writer = csv.writer(stream)
-        writer.writerow(CSV_COLUMNS)
-        for row in rows:
-            writer.writerow(csv_row(row))
-    for task in tasks:
-        os.remove(task[-2])  # its partial CSV
+    write_csv(out + '.csv', rows, CSV_COLUMNS)
     return report(rows, by_model, quick, *lengths, threads)
 
 
@@ -227,12 +205,12 @@ def report(rows, by_model, quick, equilibrate_ps, discard_ps, production_ps, sam
     ranks = {method: k for k, method in enumerate(METHODS + (HALF_STEP, 'M-RATTLE Langevin') + THERMOSTATS)}
     rows = sorted(rows, key=lambda r: (order[r['model']], r['step_fs'], ranks[r['method']]))
     for r in rows:
-        if r['failure'] is not None:
+        if r.get('failure'):
             md.append('| %s | %g | %s | - | - | - | - | %s |' % (r['model'], r['step_fs'], r['method'], verdict(r)))
             continue
         md.append('| %s | %g | %s | %.1f +- %.1f | %.1f +- %.1f | %+.1f +- %.1f | %.3g | %s |' % (
-            r['model'], r['step_fs'], r['method'], r['Ttrans'][0], r['Ttrans'][1], r['Trot'][0], r['Trot'][1],
-            r['difference'][0], r['difference'][1], r['drift'], verdict(r)))
+            r['model'], r['step_fs'], r['method'], r['Ttrans'], r['Ttrans_se'], r['Trot'], r['Trot_se'],
+            r['Trot_minus_Ttrans'], r['difference_se'], r['drift_kJ_per_mol_ns_molecule'], verdict(r)))
     md.append('')
     md.append('Per step size, NVE (3 SE as the threshold), against Asthagiri & Beck (2024): equipartition at 0.5 fs, '
               'T_rot < T_trans at 1-3 fs for rigid SPC/E:\n')
@@ -246,11 +224,12 @@ def report(rows, by_model, quick, equilibrate_ps, discard_ps, production_ps, sam
         md.append('- **%g fs** (%s): %s.' % (step, published, '; '.join(parts) or 'not run'))
     pairs = []
     for r in rows:
-        if r['method'] == METHODS[0] and r['failure'] is None:
+        if r['method'] == METHODS[0] and not r.get('failure'):
             other = [o for o in rows if o['model'] == r['model'] and o['step_fs'] == r['step_fs']
-                     and o['method'] == METHODS[1] and o['failure'] is None]
+                     and o['method'] == METHODS[1] and not o.get('failure')]
             if other:
-                (d1, e1), (d2, e2) = r['difference'], other[0]['difference']
+                d1, e1, d2, e2 = r['Trot_minus_Ttrans'], r['difference_se'], other[0]['Trot_minus_Ttrans'], \
+                    other[0]['difference_se']
                 pairs.append('%s %g fs %.1f' % (r['model'], r['step_fs'], abs(d1 - d2) / math.hypot(e1, e2)))
     if pairs:
         md.append('\nA check of the error bars: M-RATTLE and Verlet + SETTLE (on-step) integrate the same equations '
@@ -261,18 +240,3 @@ def report(rows, by_model, quick, equilibrate_ps, discard_ps, production_ps, sam
                   'scatter at this run length, and the verdicts above are to be read with that.' % ', '.join(pairs))
     return md
 
-
-def rows_from_csv(path):
-    """The rows of a CSV that run() or run_model() wrote (to report a run, or a run cut short)."""
-    rows = []
-    with open(path) as stream:
-        for r in csv.DictReader(stream):
-            row = dict(model=r['model'], method=r['method'], step_fs=float(r['step_fs']), failure=r['failure'] or None,
-                       steps=int(r['steps']), wall_s=float(r['wall_s']))
-            if row['failure'] is None:
-                row['Ttrans'] = (float(r['Ttrans']), float(r['Ttrans_se']))
-                row['Trot'] = (float(r['Trot']), float(r['Trot_se']))
-                row['difference'] = (float(r['Trot_minus_Ttrans']), float(r['difference_se']))
-                row['drift'] = float(r['drift_kJ_per_mol_ns_molecule'])
-            rows.append(row)
-    return rows

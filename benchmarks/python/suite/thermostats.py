@@ -379,7 +379,7 @@ def validate(args, quick, out, log):
         return []
     if args.study == 'equipartition':
         if args.report_from:
-            return equipartition.report(equipartition.rows_from_csv(args.report_from),
+            return equipartition.report(read_csv(args.report_from),
                                         {'TIP3P': equipartition.MOLECULES, 'SPC/E': equipartition.MOLECULES}, False,
                                         *equipartition.LENGTHS, args.threads)
         return equipartition.run(quick, os.path.join(os.path.dirname(out), 'equipartition'), log, args.threads,
