@@ -34,9 +34,6 @@ def parse(argv):
     thermostats = p.add_argument_group("validate-thermostats")
     thermostats.add_argument("--study", choices=("step-sizes", "density", "equipartition"),
                              help="a follow-up study instead of the main runs (its CSV only; equipartition: its rows)")
-    thermostats.add_argument("--steps", help="comma-separated step sizes in fs (default: the study's)")
-    thermostats.add_argument("--ps", type=float, help="the production length of each run of a study (ps)")
-    thermostats.add_argument("--methods", help="with --study step-sizes: comma-separated methods")
     thermostats.add_argument("--report-from", help="report a finished run from its CSV instead of running")
     thermostats.add_argument("--threads", type=int, default=1, help="CPU platform threads")
     return p.parse_args(argv)

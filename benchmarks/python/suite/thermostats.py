@@ -96,7 +96,7 @@ CSV_COLUMNS = ['method', 'step_fs', 'ps', 'kinetic_mean', 'kinetic_mean_se', 'ki
 STEPS_FS = (2, 0.5, 1, 3, 4, 5)
 
 
-def run(quick, out, log, threads=1, methods=METHODS, steps=None):
+def run(quick, out, log, threads=1):
     """Every run; out + '.csv' gets a row per run as it ends; returns the report as markdown lines."""
     production_ps, short_ps, equilibrate_ps = (0.2, 0.1, 0.05) if quick else (20.0, 2.0, 2.0)
     began = time.time()
@@ -104,8 +104,8 @@ def run(quick, out, log, threads=1, methods=METHODS, steps=None):
     log('thermostats: equilibrating %g ps (LangevinMiddle + SETTLE, 2 fs)' % equilibrate_ps)
     start = equilibrate(system, positions, equilibrate_ps, threads)
     rows = []
-    for method in methods:
-        for step_fs in steps or STEPS_FS:
+    for method in METHODS:
+        for step_fs in STEPS_FS:
             if method == 'LangevinMiddle + SETTLE' and step_fs != 2:
                 continue
             row = run_one(method, step_fs, production_ps if step_fs == 2 else short_ps, start, system, bodies, threads)
@@ -118,27 +118,25 @@ def run(quick, out, log, threads=1, methods=METHODS, steps=None):
 
 STEP_SIZE_METHODS = METHODS[1:]  # the sampling ones
 # MRattleLangevinIntegrator (1/ps): LangevinMiddle's splitting with M-RATTLE, to tell the splitting's share of a
-# difference from M-RATTLE's (only when asked for).
+# difference from M-RATTLE's.
 M_RATTLE_LANGEVIN = 'M-RATTLE Langevin'
-STEP_SIZE_FS = (1, 0.5)  # 2 fs: the main run's production rows
+# (method, step in fs) of the study; the others' 2 fs rows are the main run's production rows. LangevinMiddle
+# runs from 1 fs only: its configurational sampling is the reference.
+STEP_SIZE_RUNS = [(m, h) for h in (1.5, 1, 0.5) for m in STEP_SIZE_METHODS if h >= 1 or m != METHODS[3]] + \
+    [(M_RATTLE_LANGEVIN, 2), (M_RATTLE_LANGEVIN, 1)]
 
 
-def run_step_sizes(quick, out, log, threads=1, steps=STEP_SIZE_FS, ps=20.0, methods=STEP_SIZE_METHODS):
-    """The potential energy's step-size dependence (NVT): each thermostat and LangevinMiddle + SETTLE at
-    `steps` for `ps` each, from the main run's start, with the 2-fs runs' figures (out + '.csv'). LangevinMiddle
-    is run at 1 fs and up only (its configurational sampling is the reference)."""
-    assert set(methods) <= set(STEP_SIZE_METHODS + (M_RATTLE_LANGEVIN,)), methods
+def run_step_sizes(quick, out, log, threads=1, ps=20.0):
+    """The potential energy's step-size dependence (NVT): STEP_SIZE_RUNS for `ps` each from the main run's
+    start (rows to out + '.csv')."""
     ps, equilibrate_ps = (0.2, 0.05) if quick else (ps, 2.0)
     system, positions, bodies = water()
     start = equilibrate(system, positions, equilibrate_ps, threads)
     rows = []
-    for step_fs in steps:
-        for method in methods:
-            if method == 'LangevinMiddle + SETTLE' and step_fs < 1:
-                continue
-            rows.append(run_one(method, step_fs, ps, start, system, bodies, threads, production=True))
-            log('thermostats step sizes: %s' % rows[-1])
-            write_csv(out + '.csv', rows, CSV_COLUMNS)
+    for method, step_fs in STEP_SIZE_RUNS:
+        rows.append(run_one(method, step_fs, ps, start, system, bodies, threads, production=True))
+        log('thermostats step sizes: %s' % rows[-1])
+        write_csv(out + '.csv', rows, CSV_COLUMNS)
     return rows
 
 
@@ -367,15 +365,11 @@ def validate(args, quick, out, log):
     """`./benchmarks/run.sh validate-thermostats`: the main runs (or, --report-from, their CSV reported), or one
     follow-up study (--study: step sizes and density write their CSVs, out + '_<study>.csv', which the main report
     reads beside its own; equipartition its rows of that table). Returns the section's markdown lines."""
-    steps = [float(x) for x in args.steps.split(',')] if args.steps else None
-    extra = {'ps': args.ps} if args.ps else {}
     if args.study == 'step-sizes':
-        if args.methods:
-            extra['methods'] = tuple(args.methods.split(','))
-        run_step_sizes(quick, out + '_step_sizes', log, args.threads, steps or STEP_SIZE_FS, **extra)
+        run_step_sizes(quick, out + '_step_sizes', log, args.threads)
         return []
     if args.study == 'density':
-        run_density(quick, out + '_density', log, args.threads, **extra)
+        run_density(quick, out + '_density', log, args.threads)
         return []
     if args.study == 'equipartition':
         if args.report_from:
@@ -389,4 +383,4 @@ def validate(args, quick, out, log):
         beside = [read_csv(stem + suffix) if os.path.exists(stem + suffix) else None
                   for suffix in ('_step_sizes.csv', '_density.csv')]
         return report(read_csv(args.report_from), 895, False, 20.0, 2.0, 2.0, 1, 0.0, *beside)
-    return run(quick, out, log, args.threads, steps=steps)
+    return run(quick, out, log, args.threads)
