@@ -9,10 +9,6 @@ import mrattle
 from . import common, stats
 
 
-def _copy(system):
-    return openmm.XmlSerializer.deserialize(openmm.XmlSerializer.serialize(system))
-
-
 def _positions(model):
     return np.array(model.positions.value_in_unit(unit.nanometer))
 
@@ -21,9 +17,10 @@ def _bodies(model):
     return common.benzene_bodies(model.system.getNumParticles())
 
 
-def _angular_momentum(state, system):
-    x = state.getPositions(asNumpy=True).value_in_unit(unit.nanometer)
-    v = state.getVelocities(asNumpy=True).value_in_unit(unit.nanometer / unit.picosecond)
+def _angular_momentum(system, state=None, x=None, v=None):
+    if state is not None:
+        x = state.getPositions(asNumpy=True).value_in_unit(unit.nanometer)
+        v = state.getVelocities(asNumpy=True).value_in_unit(unit.nanometer / unit.picosecond)
     return (common.masses(system)[:, None] * np.cross(x, v)).sum(0)
 
 
@@ -59,13 +56,13 @@ def isolated_benzene(steps_fs, total_ps, log):
     total_ps = max(1, round(total_ps / 0.032)) * 0.032
     ref = common.nve_run(system, x0, v0, "M-RATTLE", reference_step, total_ps, total_ps, "Reference", bodies)
     ref_positions = ref["context"].getState(getPositions=True).getPositions(asNumpy=True).value_in_unit(unit.nanometer)
-    L0 = _angular_momentum(_initial_state(system, x0, v0), system)
+    L0 = _angular_momentum(system, x=x0, v=v0)
     rows = []
     for method in ("M-RATTLE", "splitting"):
         for h in steps_fs:
             run = common.nve_run(system, x0, v0, method, h * common.FS, total_ps, 0.032, "Reference", bodies)
             state = run["context"].getState(getPositions=True, getVelocities=True)
-            L = _angular_momentum(state, system)
+            L = _angular_momentum(system, state)
             e = run["total"]
             rows.append({
                 "system": "isolated benzene", "method": method, "step_fs": h,
@@ -78,13 +75,6 @@ def isolated_benzene(steps_fs, total_ps, log):
             log("  isolated benzene %-9s h=%4.1f fs  |dE|/E=%.2e  |dL|/L=%.2e  x err=%.2e nm" % (
                 method, h, rows[-1]["energy_rel_error"], rows[-1]["angmom_rel_error"], rows[-1]["position_error_nm"]))
     return rows
-
-
-def _initial_state(system, x, v):
-    context = openmm.Context(system, openmm.VerletIntegrator(0.001), openmm.Platform.getPlatformByName("Reference"))
-    context.setPositions(x)
-    context.setVelocities(v)
-    return context.getState(getPositions=True, getVelocities=True)
 
 
 def energy_vs_step(label, system, positions, velocities, bodies, methods, steps_fs, total_ps, log, platform="CPU"):
@@ -145,7 +135,7 @@ def planar_benzene_with_constraints(total_ps, log):
     all_pairs = [(i, j) for i in range(12) for j in range(i + 1, 12)]
     rows = []
     for name, pairs in (("30 bond+angle distances", bonded + angles), ("all 66 pair distances", all_pairs)):
-        system = _copy(model.system)
+        system = openmm.XmlSerializer.deserialize(openmm.XmlSerializer.serialize(model.system))
         for body in bodies:
             for i, j in pairs:
                 system.addConstraint(body[i], body[j], float(np.linalg.norm(sites[i] - sites[j])))

@@ -119,7 +119,7 @@ def tetrahedral_sites():
 TETRAHEDRAL_PAIRS = [(0, 2), (0, 3), (0, 4), (1, 2), (1, 3), (1, 4), (2, 3), (2, 4), (3, 4), (0, 1)]
 
 
-def tetrahedral_cluster(num_per_side=3, spacing=0.55, seed=7, constraints=None, temperature=200.0):
+def tetrahedral_cluster(num_per_side=3, spacing=0.55, seed=7, constraints=None):
     """N^3 rigid tetrahedral molecules in vacuum with LJ + charges between molecules.
 
     constraints: None, or the number of intra-molecular pair distances to declare as
@@ -133,8 +133,7 @@ def tetrahedral_cluster(num_per_side=3, spacing=0.55, seed=7, constraints=None, 
     system = openmm.System()
     nb = openmm.NonbondedForce()
     nb.setNonbondedMethod(openmm.NonbondedForce.NoCutoff)
-    positions, bodies = [], []
-    pairs = TETRAHEDRAL_PAIRS
+    positions, bodies, pairs = [], [], TETRAHEDRAL_PAIRS
     for a in range(num_per_side):
         for b in range(num_per_side):
             for c in range(num_per_side):
