@@ -2,7 +2,7 @@
 """The benchmark suite behind docs/results.md, run through its one door, ./benchmarks/run.sh TARGET:
 
     paper                   M-RATTLE against the splitting method: accuracy, cost, sampling, drift
-    validate-langevin       MRattleLangevinIntegrator against LangevinMiddle + SETTLE (also docs/results/langevin.md)
+    validate-langevin       MRattleLangevinIntegrator against LangevinMiddle + SETTLE
     validate-equipartition  rigid water, translational against rotational temperature
     validate-thermostats    Nose-Hoover chain and CSVR on rigid water [--study step-sizes|density|equipartition]
     validate-minimization, validate-minimization-starts   studies with options of their own
@@ -55,6 +55,8 @@ def main(argv=None):
 
     out = args.out or (os.path.join(args.build, "results-quick") if args.quick else os.path.join(ROOT, "docs"))
     results_dir = os.path.join(out, "results")
+    # The paper's rows go to the build (docs/results/ holds what the documents cite), or beside the report with --out.
+    rows_dir = results_dir if args.out or args.quick else os.path.join(args.build, "results")
     os.makedirs(results_dir, exist_ok=True)
     all_parts = TARGETS[args.target]
     parts = set(args.only.split(",")) if args.only else set(all_parts)
@@ -72,19 +74,19 @@ def main(argv=None):
         timings, ratios = cost.run(["Reference", "CPU"], [100, 1000, 3000] if not q else [50],
                                    [3, 5, 12, 30] if not q else [3, 5], 7 if not q else 2, 0.1 if not q else 0.01, log,
                                    threads=[1, 2])
-        write_csv(os.path.join(results_dir, "cost_step_times.csv"), timings)
-        write_csv(os.path.join(results_dir, "cost_ratios.csv"), ratios)
+        write_csv(os.path.join(rows_dir, "cost_step_times.csv"), timings)
+        write_csv(os.path.join(rows_dir, "cost_ratios.csv"), ratios)
         cost.plot(timings, os.path.join(results_dir, "cost_step_times.png"))
         log("cost: the paper's systems (one benzene, the 27-benzene cluster), forces included")
         prows = cost.paper_systems(["Reference", "CPU"], 7 if not q else 1, 0.2 if not q else 0.01, log)
-        write_csv(os.path.join(results_dir, "cost_paper_systems.csv"), prows)
+        write_csv(os.path.join(rows_dir, "cost_paper_systems.csv"), prows)
         md += report.cost_section(timings, ratios, prows)
 
     if "accuracy" in parts:
         log("accuracy: isolated benzene")
         steps = [0.5, 1, 2, 4, 8]
         iso = accuracy.isolated_benzene(steps if not q else [1, 2], 2.048 if not q else 0.064, log)
-        write_csv(os.path.join(results_dir, "accuracy_isolated_benzene.csv"), iso)
+        write_csv(os.path.join(rows_dir, "accuracy_isolated_benzene.csv"), iso)
         accuracy.plot_isolated(iso, os.path.join(results_dir, "accuracy_isolated_benzene.png"))
 
         log("accuracy: 27-benzene cluster")
@@ -98,19 +100,19 @@ def main(argv=None):
         rows += accuracy.energy_vs_step("27 tetrahedral 5-site", tsys, tx, tv, tbodies,
                                         ["M-RATTLE", "splitting", "RATTLE (CustomIntegrator)", "Verlet + CCMA"],
                                         steps if not q else [1, 2], 4.0 if not q else 0.1, log, platform="Reference")
-        write_csv(os.path.join(results_dir, "accuracy_energy_vs_step.csv"), rows)
+        write_csv(os.path.join(rows_dir, "accuracy_energy_vs_step.csv"), rows)
         accuracy.plot(rows, os.path.join(results_dir, "accuracy_energy_vs_step.png"), "Energy fluctuation against step size")
         order_rows = accuracy.orders(rows)
         log("accuracy: planar benzene under OpenMM's distance constraints")
         planar = accuracy.planar_benzene_with_constraints(0.5 if not q else 0.05, log)
-        write_csv(os.path.join(results_dir, "accuracy_planar_constraints.csv"), planar)
+        write_csv(os.path.join(rows_dir, "accuracy_planar_constraints.csv"), planar)
         log("accuracy: which 9-constraint sets OpenMM's CCMA converges on")
         ccma = accuracy.ccma_subsets(log)
-        write_csv(os.path.join(results_dir, "accuracy_ccma_subsets.csv"), ccma)
+        write_csv(os.path.join(rows_dir, "accuracy_ccma_subsets.csv"), ccma)
         log("accuracy: time reversibility (forward, reverse the velocities, back)")
         rev_steps = [10, 1000] if not q else [10, 50]
         rev = accuracy.reversibility(rev_steps, 2.0, log)
-        write_csv(os.path.join(results_dir, "accuracy_reversibility.csv"), rev)
+        write_csv(os.path.join(rows_dir, "accuracy_reversibility.csv"), rev)
         md += report.accuracy_section(iso, rows, order_rows, planar, ccma, q)
         md += report.reversibility_section(rev, rev_steps)
 
@@ -120,7 +122,7 @@ def main(argv=None):
         per_run, eq, step = (24.0, 4.0, 4.0) if not q else (0.8, 0.2, 4.0)
         res = {m: sampling.run_many(m, seeds, per_run, eq, step, 200.0, log) for m in ("M-RATTLE", "splitting")}
         srows = sampling.compare(res)
-        write_csv(os.path.join(results_dir, "sampling_comparison.csv"), srows)
+        write_csv(os.path.join(rows_dir, "sampling_comparison.csv"), srows)
         sampling.plot(res, os.path.join(results_dir, "sampling_histograms.png"))
         md += report.sampling_section(srows, len(seeds), per_run, eq, step, q)
 
@@ -131,17 +133,14 @@ def main(argv=None):
         dplan, deq, dsample, dradius, dtemp = ({4.0: (200.0, [1, 2]), 2.0: (100.0, [1])}, 100.0, 0.1, 2.0, 200.0) \
             if not q else ({4.0: (0.4, [1])}, 0.4, 0.02, 2.0, 200.0)
         drows = long_drift.run(dtemp, dplan, deq, dsample, dradius, log)
-        write_csv(os.path.join(results_dir, "long_drift.csv"),
+        write_csv(os.path.join(rows_dir, "long_drift.csv"),
                   [{k: v for k, v in r.items() if not k.startswith("series_")} for r in drows])
         long_drift.plot(drows, os.path.join(results_dir, "long_drift.png"))
         md += report.long_drift_section(drows, dtemp, deq, dsample, dradius)
 
     if "langevin" in parts:
         log("langevin: validation against LangevinMiddle + SETTLE (water NVT, NPT; liquid benzene)")
-        section = langevin.run(q, os.path.join(results_dir, "langevin"), log)
-        with open(os.path.join(results_dir, "langevin.md"), "w") as stream:
-            stream.write("\n".join(section) + "\n")
-        md += section
+        md += langevin.run(q, os.path.join(results_dir, "langevin"), log)
 
     if "equipartition" in parts:
         log("equipartition: rigid TIP3P and SPC/E water, NVE at 0.5-4 fs (translational against rotational T)")

@@ -140,7 +140,8 @@ def run(platforms, body_counts, atoms, repeats, batch_seconds, log, threads=(1,)
                 log("  cost %s k=%d N=%d: %s" % (platform_name, k, n, ", ".join(
                     "%s %.1f us" % (name if t == counts[0] else "%s (%d threads)" % (name, t), m * 1e6)
                     for (name, t), m in medians.items())))
-    return timings, ratios
+    six = lambda v: float("%.6g" % v) if isinstance(v, float) else v  # noqa: E731  (6 significant digits)
+    return [{k: six(v) for k, v in r.items()} for r in timings], [{k: six(v) for k, v in r.items()} for r in ratios]
 
 
 def paper_systems(platforms, batches, batch_seconds, log):
