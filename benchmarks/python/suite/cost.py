@@ -132,7 +132,7 @@ def run(platforms, body_counts, atoms, repeats, batch_seconds, log, threads=(1,)
                         met = value <= float(target[2:]) if target[0] == "<" else value >= float(target[2:])
                         ratios.append(dict(row, ratio=label, value=value, target=target, met="yes" if met else "no"))
                 for count in counts[1:]:  # the speed-up from threads
-                    for name in ("mrattle", "splitting"):
+                    for name in [n for n in ("mrattle", "splitting") if (n, count) in medians]:
                         value = medians[name, counts[0]] / medians[name, count]
                         target = ">=1.7" if n >= 3000 and name == "mrattle" else "-"
                         ratios.append(dict(row, ratio="%s threads %d/%d" % (name, counts[0], count), value=value,
@@ -212,7 +212,7 @@ def main(argv=None):
                           a.integrators.split(",") if a.integrators else None)
     common.write_csv(a.out + "/step_cost.csv", timings)
     common.write_csv(a.out + "/step_cost-ratios.csv", ratios)
-    print("\n".join(",".join(str(v) for v in r.values()) for r in ratios))
+    print("\n".join([",".join(ratios[0])] + [",".join(map(str, r.values())) for r in ratios]) if ratios else "")
     return 0 if all(r["finite"] == "yes" for r in timings) else 2
 
 
