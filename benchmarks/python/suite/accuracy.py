@@ -227,9 +227,7 @@ def _projected_kinetic_energy(sites, masses, velocities, pairs, how):
         integrator.addRigidBody(list(range(len(masses))))
     else:
         integrator = openmm.VerletIntegrator(0.001)
-    context = openmm.Context(system, integrator, openmm.Platform.getPlatformByName("Reference"))
-    context.setPositions(sites)
-    context.setVelocities(velocities)
+    context = common.context(system, integrator, sites, velocities, "Reference")
     if how != "M-RATTLE":
         try:
             context.applyVelocityConstraints(1e-8)
@@ -246,9 +244,7 @@ def _forward_and_back(system, positions, velocities, method, step_ps, steps, bod
     irreversibility plus round-off (and, for CCMA, its constraint tolerance).
     """
     integrator = common.make_integrator(method, step_ps, tolerance, bodies)
-    context = openmm.Context(system, integrator, openmm.Platform.getPlatformByName("Reference"))
-    context.setPositions(positions)
-    context.setVelocities(velocities)
+    context = common.context(system, integrator, positions, velocities, "Reference")
     context.applyConstraints(tolerance)  # start exactly on the constraint surface for every method
     context.applyVelocityConstraints(tolerance)
     x0 = context.getState(getPositions=True).getPositions(asNumpy=True).value_in_unit(unit.nanometer)

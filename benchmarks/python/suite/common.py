@@ -24,6 +24,17 @@ def platform(name, threads=None):
     return openmm.Platform.getPlatformByName(name), properties
 
 
+def context(system, integrator, positions, velocities=None, platform_name="CPU", threads=None):
+    """A Context at `positions` with `velocities`: an array, or (temperature, seed) for thermal ones."""
+    c = openmm.Context(system, integrator, *platform(platform_name, threads))
+    c.setPositions(positions)
+    if isinstance(velocities, tuple):
+        c.setVelocitiesToTemperature(*velocities)
+    elif velocities is not None:
+        c.setVelocities(velocities)
+    return c
+
+
 def make_integrator(method, step_ps, tolerance=1e-10, bodies=None):
     """Integrators compared in the suite, by name; the plugin's get `bodies` declared."""
     if method in ("M-RATTLE", "splitting"):
@@ -59,14 +70,10 @@ def nve_run(system, positions, velocities, method, step_ps, total_ps, sample_ps,
     and is reported in 'failure'.
     """
     integrator = make_integrator(method, step_ps, tolerance, bodies)
-    plat, props = platform(platform_name, threads)
-    context = openmm.Context(system, integrator, plat, props)
-    context.setPositions(positions)
-    if velocities is not None:
-        context.setVelocities(velocities)
+    context_ = context(system, integrator, positions, velocities, platform_name, threads)
     stride = max(1, int(round(sample_ps / step_ps)))
     samples = max(1, int(round(total_ps / (stride * step_ps))))
-    dof = mrattle.degreesOfFreedom(context)
+    dof = mrattle.degreesOfFreedom(context_)
     times, kinetic, potential, rigidity = [], [], [], []
     reference = None
     failure = None
@@ -78,7 +85,7 @@ def nve_run(system, positions, velocities, method, step_ps, total_ps, sample_ps,
             except Exception as error:  # OpenMM's constraint failures arrive as exceptions
                 failure = str(error).splitlines()[0]
                 break
-        state = context.getState(getEnergy=True, getPositions=bodies is not None)
+        state = context_.getState(getEnergy=True, getPositions=bodies is not None)
         ke = state.getKineticEnergy().value_in_unit(unit.kilojoule_per_mole)
         pe = state.getPotentialEnergy().value_in_unit(unit.kilojoule_per_mole)
         if not (math.isfinite(ke) and math.isfinite(pe)):
@@ -101,7 +108,7 @@ def nve_run(system, positions, velocities, method, step_ps, total_ps, sample_ps,
     return {
         "time": np.array(times), "kinetic": kinetic, "potential": potential, "total": kinetic + potential,
         "rigidity": np.array(rigidity), "dof": dof, "wall": wall, "steps": len(times) and (len(times) - 1) * stride,
-        "failure": failure, "context": context, "integrator": integrator,
+        "failure": failure, "context": context_, "integrator": integrator,
     }
 
 
@@ -278,11 +285,9 @@ def equilibrate(system, positions, ps, threads, seed=11):
     barostat the System's default box becomes the one reached, so that runs start in it."""
     integrator = openmm.LangevinMiddleIntegrator(TEMPERATURE * unit.kelvin, 1 / unit.picosecond, 2 * unit.femtoseconds)
     integrator.setRandomNumberSeed(seed)
-    context = openmm.Context(system, integrator, *platform("CPU", threads))
-    context.setPositions(positions)
-    context.setVelocitiesToTemperature(TEMPERATURE * unit.kelvin, seed)
+    c = context(system, integrator, positions, (TEMPERATURE * unit.kelvin, seed), "CPU", threads)
     integrator.step(int(round(ps / 0.002)))
-    state = context.getState(getPositions=True, getVelocities=True)
+    state = c.getState(getPositions=True, getVelocities=True)
     system.setDefaultPeriodicBoxVectors(*state.getPeriodicBoxVectors())
     return state.getPositions(asNumpy=True), state.getVelocities(asNumpy=True)
 

@@ -98,9 +98,7 @@ def run(platforms, body_counts, atoms, repeats, batch_seconds, log, threads=(1,)
                     else:
                         integrator = common.make_integrator("splitting" if name == "splitting" else "M-RATTLE", 0.002,
                                                             bodies=[list(range(b * k, b * k + k)) for b in range(n)])
-                    context = openmm.Context(system, integrator, *common.platform(platform_name, count))
-                    context.setPositions(positions)
-                    context.setVelocitiesToTemperature(300, 1)
+                    context = common.context(system, integrator, positions, (300, 1), platform_name, count)
                     integrator.step(5)  # warm up, then size the batches to batch_seconds
                     start = time.perf_counter()
                     integrator.step(10)
@@ -158,9 +156,7 @@ def paper_systems(platforms, batches, batch_seconds, log):
             runs, contexts, steps = {}, [], {}
             for method in ("M-RATTLE", "splitting"):
                 runs[method] = integrator = common.make_integrator(method, 2 * common.FS, bodies=bodies)
-                contexts.append(openmm.Context(model.system, integrator, *common.platform(platform_name, 1)))
-                contexts[-1].setPositions(x)
-                contexts[-1].setVelocities(v)
+                contexts.append(common.context(model.system, integrator, x, v, platform_name, 1))
                 integrator.step(10)
                 start = time.perf_counter()
                 integrator.step(20)

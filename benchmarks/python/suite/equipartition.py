@@ -9,11 +9,10 @@ import sys
 import time
 
 import numpy as np
-import openmm
 from openmm import unit
 
-from .common import (block_mean, equilibrate, masses as masses_of, platform, read_csv, removes_cm, temperatures, water,
-                     water_integrator, write_csv)
+from .common import (block_mean, context as start_context, equilibrate, masses as masses_of, read_csv, removes_cm,
+                     temperatures, water, water_integrator, write_csv)
 
 MODELS = (('TIP3P', 'tip3p.pdb', 'amber14/tip3p.xml'), ('SPC/E', 'spce.pdb', 'amber14/spce.xml'))
 NVE_STEPS_FS = (0.5, 1, 2, 3, 4)
@@ -63,9 +62,7 @@ def run_one(model, system, bodies, start, method, step_fs, discard_ps, productio
     velocities are v + (h/2) f/m made rigid (velocity Verlet's, i.e. RATTLE's), and a second
     result gives the State velocities as they are."""
     integrator = water_integrator(method, step_fs)
-    context = openmm.Context(system, integrator, *platform('CPU', threads))
-    context.setPositions(start[0])
-    context.setVelocities(start[1])
+    context = start_context(system, integrator, start[0], start[1], 'CPU', threads)
     masses, cm = masses_of(system), removes_cm(system)
     leapfrog = method == 'Verlet + SETTLE'
     bath = getattr(integrator, 'computeHeatBathEnergy', lambda: 0 * unit.kilojoule_per_mole)

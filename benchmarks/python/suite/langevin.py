@@ -8,8 +8,8 @@ import openmm
 from openmm import unit
 
 import mrattle
-from .common import (KB, block_mean, masses as masses_of, platform, removes_cm, rigid_split, temperatures, water,
-                     water_integrator, write_csv)
+from .common import (KB, block_mean, context as start_context, masses as masses_of, removes_cm, rigid_split,
+                     temperatures, water, water_integrator, write_csv)
 
 
 def verdict(value, error, target, tolerance):
@@ -43,9 +43,7 @@ def oo_peak(frames, oxygens, box):
 def run_water(method, barostat, equilibrate, production, sample, seed, log):
     system, positions, bodies = water(barostat_seed=0 if barostat else None)  # bodies: every residue, the waters
     integrator = water_integrator(method, 2, seed)
-    context = openmm.Context(system, integrator, *platform('CPU'))
-    context.setPositions(positions)
-    context.setVelocitiesToTemperature(300 * unit.kelvin, seed)
+    context = start_context(system, integrator, positions, (300 * unit.kelvin, seed))
     masses, cm = masses_of(system), removes_cm(system)
     dof = 6 * len(bodies) - (3 if cm else 0)
     start = time.time()
@@ -77,9 +75,7 @@ def benzene_temperatures(step_fs, steps, log, equilibration_ps=20.0):
     model = mrattle.models.benzeneLiquid()
     integrator = mrattle.MRattleLangevinIntegrator(298 * unit.kelvin, 1 / unit.picosecond, step_fs * unit.femtoseconds)
     integrator.setRandomNumberSeed(7)
-    context = openmm.Context(model.system, integrator, *platform('CPU'))
-    context.setPositions(model.positions)
-    context.setVelocitiesToTemperature(298 * unit.kelvin, 1)
+    context = start_context(model.system, integrator, model.positions, (298 * unit.kelvin, 1))
     bodies, masses, cm = integrator.getBodiesInEffect(), masses_of(model.system), removes_cm(model.system)
     try:
         integrator.step(int(1000 * equilibration_ps / step_fs))  # from the lattice

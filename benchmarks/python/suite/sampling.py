@@ -1,6 +1,5 @@
 """Sampling: long NVE runs of the 27-benzene cluster with M-RATTLE and splitting, compared."""
 import numpy as np
-import openmm
 from openmm import unit
 
 import mrattle
@@ -28,9 +27,7 @@ def run(method, total_ps, step_fs, temperature, seed, log):
     """Sample kinetic temperature, per-molecule translational/rotational KE and intermolecular C-C distances."""
     model = mrattle.models.benzeneCluster(temperature=temperature * unit.kelvin, seed=seed)
     integrator = common.make_integrator(method, step_fs * common.FS)
-    context = openmm.Context(model.system, integrator, *common.platform("CPU", 1))
-    context.setPositions(model.positions)
-    context.setVelocities(model.velocities)
+    context = common.context(model.system, integrator, model.positions, model.velocities, "CPU", 1)
     n_mol = model.system.getNumParticles() // 12
     all_masses, bodies = common.masses(model.system), common.benzene_bodies(model.system.getNumParticles())
     masses = all_masses[:12]

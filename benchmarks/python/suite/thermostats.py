@@ -8,13 +8,12 @@ import math
 import time
 
 import numpy as np
-import openmm
 from openmm import unit
 
 import mrattle
 
 from . import equipartition
-from .common import (KB, TEMPERATURE, block_mean, equilibrate, masses as masses_of, platform, read_csv,
+from .common import (KB, TEMPERATURE, block_mean, context as start_context, equilibrate, masses as masses_of, read_csv,
                      temperatures, water, water_integrator, write_csv)
 from .stats import drift_with_error
 
@@ -52,9 +51,7 @@ def run_series(method, step_fs, ps, start, system, bodies, threads, sample_fs=SA
     """One run's series (every sample_fs): time, kinetic, potential, conserved energy, T_trans, T_rot, density;
     oxygen positions."""
     integrator = water_integrator(method, step_fs)
-    context = openmm.Context(system, integrator, *platform('CPU', threads))
-    context.setPositions(start[0])
-    context.setVelocities(start[1])
+    context = start_context(system, integrator, start[0], start[1], 'CPU', threads)
     rigid = isinstance(integrator, mrattle.RigidBodyIntegrator)
     bath = getattr(integrator, 'computeHeatBathEnergy', None)
     masses = masses_of(system)
