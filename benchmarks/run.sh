@@ -3,7 +3,7 @@
 #     ./benchmarks/run.sh speed [--platform NAME] [--precision P] [--out DIR] [--quick]
 #         this plugin against OpenMM's own integrators on this machine: rigid TIP3P water, M-RATTLE
 #         against Verlet + SETTLE and LangevinMiddle + SETTLE (device platforms: benchmarks/cpp/device_speed,
-#         the integration's own cost and ns/day with PME; CPU and Reference: benchmarks/cpp/step_cost)
+#         the integration's own cost and ns/day with PME; CPU and Reference: benchmarks/python/suite/cost.py)
 #     ./benchmarks/run.sh paper|validate-<study> [options]          the suite (benchmarks/python/run_suite.py)
 set -euo pipefail
 root="$(cd "$(dirname "$0")/.." && pwd)"
@@ -32,13 +32,11 @@ mkdir -p "$out"
 echo "speed: M-RATTLE plugin $("$root/scripts/python.sh" -c 'import mrattle; print(mrattle.__version__)'), $platform; CSVs in $out" >&2
 if [ "$platform" = CPU ] || [ "$platform" = Reference ]; then
     # Forces excluded: 1000 and 3000 rigid waters (k = 3) and 5-atom bodies, 1 and 2 threads.
-    "$build/benchmarks/cpp/step_cost" --platforms "$platform" --atoms 3,5 \
-        --bodies "$([ -n "$quick" ] && echo 50 || echo 1000,3000)" --integrators verlet,mrattle,verlet_settle,verlet_ccma \
-        --threads 1,2 --repeats "$([ -n "$quick" ] && echo 2 || echo 9)" --out "$out/step_cost.csv" --ratios "$out/step_cost-ratios.csv"
-    cat "$out/step_cost-ratios.csv"
-    exit
+    PYTHONPATH="$root/benchmarks/python" exec "$root/scripts/python.sh" -m suite.cost --platforms "$platform" \
+        --integrators verlet,mrattle,verlet_settle,verlet_ccma --out "$out" \
+        $([ -n "$quick" ] && echo --bodies 50 --repeats 2 --batch-seconds 0.01)
 fi
-speed=("$build/benchmarks/cpp/device_speed" --platform "$platform" --warmup 20 --batch-seconds 0.5)
+speed=("$build/benchmarks/cpp/device_speed" --platform "$platform" --batch-seconds 0.5)
 [ -n "$quick" ] && speed=("$build/benchmarks/cpp/device_speed" --platform "$platform" --small)
 for precision in $precisions; do
     # Bare (the integration's own cost): 512 and 4,096 waters, 9 interleaved batches.

@@ -1,69 +1,59 @@
-/*
- * device_speed: M-RATTLE against OpenMM's own rigid water (SETTLE) on a device platform:
- * CUDA on a GPU, or OpenCL (through pocl on a CPU only to check that it runs: --small).
- * A C++ program so that it runs where there is no Python OpenMM (the lent GPU machine).
- *
- * For each size, a cubic box of n^3 rigid TIP3P waters (3 n^3 atoms, density 33.4 /nm^3,
- * random orientations on a lattice) in two Systems with the same particles, constraints
- * and positions:
- *   pme    TIP3P charges and Lennard-Jones, PME, cutoff 0.9 nm: ns/day
- *   bare   the only force a CustomExternalForce with a zero coefficient on one particle:
- *          the integration's own cost per step (forces excluded)
- * and four integrators (2 fs), each with its own Context in the given precision:
- *   verlet_settle     OpenMM's VerletIntegrator; OpenMM applies SETTLE to the waters
- *   mrattle           MRattleIntegrator, each water a declared rigid body
- *   langevin_settle   OpenMM's LangevinMiddleIntegrator, 300 K, 1/ps, with SETTLE
- *   mrattle_langevin  MRattleLangevinIntegrator, 300 K, 1/ps
- * The four Contexts of one (size, System) are timed in interleaved batches (each about
- * --batch-seconds long, ending with a download of the positions, whose own time is measured
- * and subtracted), so their ratios see the same machine state; the median is reported.
- * After the batches the largest error of the water geometry (O-H and H-H distances) and
- * whether the state is finite are recorded.
- *
- * Usage: device_speed [--platform CUDA] [--precision mixed] [--waters-per-side 20,32,69] [--systems bare,pme]
- *                     [--repeats 3] [--batch-seconds 0.5] [--warmup 50] [--budget SECONDS]
- *                     [--plugins FILE[,FILE]] [--out FILE] [--ratios FILE] [--small]
- * --small: 6 waters per side (648 atoms), 2 repeats of 0.2 s, 5 warm-up steps.
- * --budget: a (size, System) group is not started once this many seconds have passed (it is
- * named as skipped), so a run with a wall-clock limit still writes what it measured.
- * --systems: which of the two Systems to time (default both), so that a script can run each
- * (size, System) group as its own process under a hard time limit (scripts/gpu-check.sh).
- * --plugins: the plugin's device kernel libraries to load (default: those of this build).
- * OpenMM's platforms come from OPENMM_PLUGIN_DIR, else the build's OpenMM plugin folder.
- * Timings go to --out (default stdout), the targets to --ratios (default stderr), as CSV; each
- * ratio of medians comes with the paired ratio of adjacent batches and its 95% interval.
- * Exit status 2 if a run diverged or lost its geometry, 3 if the platform or the plugin's
- * kernels on it are not there, 4 if the budget left a group out.
- */
-#include "BenchmarkSupport.h"
+// device_speed: M-RATTLE against OpenMM's SETTLE on a device platform (CUDA, OpenCL), rigid TIP3P
+// boxes, ns/day with PME and the integration's own cost; options and output in docs/benchmarks-cpp.md.
+// C++ so that it runs where there is no Python OpenMM. Exit 2: a run diverged or lost its geometry;
+// 3: the platform or the plugin's kernels on it are not there.
 #include "MRattleBuildInfo.h"
 #include "MRattleIntegrator.h"
 #include "MRattleLangevinIntegrator.h"
 #include "OpenMM.h"
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <cstdlib>
+#include <fstream>
 #include <iomanip>
 #include <iostream>
 #include <map>
 #include <memory>
 #include <random>
+#include <sstream>
 #include <string>
 #include <vector>
 
 using namespace OpenMM;
 using std::string;
 using std::vector;
-using namespace MRattleBenchmark;
 
 namespace {
+
+using Clock = std::chrono::steady_clock;
+
+double secondsSince(Clock::time_point start) {
+    return std::chrono::duration<double>(Clock::now() - start).count();
+}
+
+double median(vector<double> values) {
+    std::sort(values.begin(), values.end());
+    const size_t n = values.size();
+    return n % 2 == 1 ? values[n / 2] : 0.5 * (values[n / 2 - 1] + values[n / 2]);
+}
+
+/** The items of a comma-separated option value. */
+vector<string> split(const string& text) {
+    vector<string> parts;
+    std::stringstream stream(text);
+    for (string part; std::getline(stream, part, ',');)
+        if (!part.empty())
+            parts.push_back(part);
+    return parts;
+}
 
 struct Options {
     string platform = "CUDA", precision = "mixed", out, ratios;
     vector<int> watersPerSide = {20, 32, 69};  // 24,000, 98,304 and 985,527 atoms
     vector<string> plugins, systems = {"bare", "pme"};
-    int repeats = 3, warmup = 50;
-    double batchSeconds = 0.5, budget = 0;
+    int repeats = 3, warmup = 20;
+    double batchSeconds = 0.5;
 };
 
 Options parse(int argc, char** argv) {
@@ -96,10 +86,6 @@ Options parse(int argc, char** argv) {
             options.repeats = std::stoi(value);
         else if (flag == "--batch-seconds")
             options.batchSeconds = std::stod(value);
-        else if (flag == "--warmup")
-            options.warmup = std::stoi(value);
-        else if (flag == "--budget")
-            options.budget = std::stod(value);
         else if (flag == "--plugins")
             options.plugins = split(value);
         else if (flag == "--systems")
@@ -111,8 +97,8 @@ Options parse(int argc, char** argv) {
         else
             throw std::runtime_error("device_speed: unknown option " + flag);
     }
-    if (options.repeats < 1 || options.batchSeconds <= 0 || options.warmup < 1)
-        throw std::runtime_error("device_speed: --repeats and --warmup must be >= 1 and --batch-seconds > 0");
+    if (options.repeats < 1 || options.batchSeconds <= 0)
+        throw std::runtime_error("device_speed: --repeats must be >= 1 and --batch-seconds > 0");
     for (int n : options.watersPerSide)
         if (n < 6)
             throw std::runtime_error("device_speed: --waters-per-side must be >= 6 (the box must hold the 0.9 nm cutoff)");
@@ -315,13 +301,6 @@ PairedRatio pairedRatio(const vector<double>& a, const vector<double>& b, bool i
     return {std::exp(mean), std::exp(mean - 2 * error), std::exp(mean + 2 * error)};
 }
 
-bool havePlatform(const string& name) {
-    for (int i = 0; i < Platform::getNumPlatforms(); i++)
-        if (Platform::getPlatform(i).getName() == name)
-            return true;
-    return false;
-}
-
 } // namespace
 
 int main(int argc, char** argv) {
@@ -341,25 +320,36 @@ int main(int argc, char** argv) {
                 std::cerr << "device_speed: the kernel plugin " << plugin << " did not load: " << e.what() << "\n";
             }
         }
-        if (!havePlatform(options.platform)) {
+        Platform* found = nullptr;
+        for (int i = 0; i < Platform::getNumPlatforms(); i++)
+            if (Platform::getPlatform(i).getName() == options.platform)
+                found = &Platform::getPlatform(i);
+        if (found == nullptr) {
             std::cerr << "device_speed: OpenMM " << Platform::getOpenMMVersion() << " has no " << options.platform
                       << " platform here (see the plugin load failures above)\n";
             return 3;
         }
-        Platform& platform = Platform::getPlatformByName(options.platform);
+        Platform& platform = *found;
         if (!platform.supportsKernels({"IntegrateMRattleStep", "IntegrateMRattleLangevinStep"})) {
             std::cerr << "device_speed: the plugin's kernels are not registered on " << options.platform
                       << " (give their library with --plugins)\n";
             return 3;
         }
-        CsvOutputs csv(options.out, options.ratios);
-        std::ostream& out = csv.out;
-        std::ostream& ratios = csv.ratios;
+        // Timings to --out (default stdout), the targets to --ratios (default stderr).
+        std::ofstream outFile, ratiosFile;
+        if (!options.out.empty())
+            outFile.open(options.out);
+        if (!options.ratios.empty())
+            ratiosFile.open(options.ratios);
+        std::ostream& out = options.out.empty() ? std::cout : outFile;
+        std::ostream& ratios = options.ratios.empty() ? std::cerr : ratiosFile;
+        if (!out || !ratios)
+            throw std::runtime_error("cannot write " + options.out + " or " + options.ratios);
         out << "platform,device,precision,system,waters,atoms,integrator,steps_per_batch,batches,sync_ms,"
                "median_ms_per_step,min_ms_per_step,max_ms_per_step,ns_per_day,geometry_error_nm,finite\n";
         ratios << "system,atoms,measure,value,target,met,paired_ratio,ci95_low,ci95_high\n";
         const vector<string> names = {"verlet_settle", "mrattle", "langevin_settle", "mrattle_langevin"};
-        bool allGood = true, skipped = false;
+        bool allGood = true;
         string device = "?";
         std::cerr << "device_speed: OpenMM " << Platform::getOpenMMVersion() << ", " << options.platform << ", "
                   << options.precision << " precision\n";
@@ -370,12 +360,6 @@ int main(int argc, char** argv) {
                 if (std::find(options.systems.begin(), options.systems.end(), systemName) == options.systems.end())
                     continue;
                 const int atoms = 3 * box.waters;
-                if (options.budget > 0 && secondsSince(begin) > options.budget) {
-                    std::cerr << "device_speed: skipped " << systemName << " at " << atoms << " atoms: the budget of "
-                              << options.budget << " s is spent\n";
-                    skipped = true;
-                    continue;
-                }
                 std::unique_ptr<System> system = buildSystem(box, pme);
                 vector<Run> runs;
                 for (const string& name : names) {
@@ -446,7 +430,7 @@ int main(int argc, char** argv) {
             }
         }
         std::cerr << "device_speed: done in " << std::setprecision(4) << secondsSince(begin) << " s on " << device << "\n";
-        return !allGood ? 2 : skipped ? 4 : 0;
+        return allGood ? 0 : 2;
     }
     catch (const std::exception& e) {
         std::cerr << "device_speed: " << e.what() << "\n";

@@ -1,20 +1,9 @@
-/*
- * RigidBodyMinimizer against OpenMM's LocalEnergyMinimizer on one System, from the same
- * start (the rigid integrator's exact body shapes). Driven by ./benchmarks/run.sh validate-minimization
- * (benchmarks/python/suite/minimization.py),
- * which writes the inputs; prints one CSV row per minimizer.
- *
- *   minimize_compare SYSTEM.xml POSITIONS.txt BODIES.txt PLATFORM TOLERANCE NAME [REPEATS=3]
- *
- * POSITIONS.txt: one "x y z" line (nm) per particle. BODIES.txt: one line of particle
- * indices per declared body; empty: every molecule is a body.
- *
- * OpenMM 7.7's LocalEnergyMinimizer reports no iteration count: a second, untimed run
- * counts them from the positions it sets. Within one liblbfgs line search every trial
- * point lies on the line from the search's start; a point off that line starts a new
- * iteration from the last accepted one. (Its spring-tightening restarts add at most two
- * false counts each.) The two runs must end at the same energy for the count to hold.
- */
+// RigidBodyMinimizer against OpenMM's LocalEnergyMinimizer on one System from the same start (the rigid
+// integrator's exact shapes); ./benchmarks/run.sh validate-minimization writes the inputs. One CSV row per minimizer.
+//   minimize_compare SYSTEM.xml POSITIONS.txt BODIES.txt PLATFORM TOLERANCE NAME [REPEATS=3]
+// POSITIONS.txt: "x y z" (nm) per particle; BODIES.txt: particle indices per body, none: every molecule.
+// OpenMM 7.7's LocalEnergyMinimizer reports no iteration count: an untimed second run counts them from the
+// positions it sets (a trial point off the current line search's line starts a new iteration).
 #include "MRattleBuildInfo.h"
 #include "MRattleIntegrator.h"
 #include "RigidBodyMinimizer.h"
@@ -271,20 +260,6 @@ int main(int argc, char** argv) {
         print(name, mine, "");
         print(name, openmm, same ? "iterations counted in a second run that ended at the same energy"
                                  : "iterations counted in a second run that ended ELSEWHERE: count not valid");
-        // One evaluation's Context work (setPositions, virtual sites, forces and energy) in the
-        // two Contexts, alternated so that a change of machine load hits both alike.
-        double rigidSeconds = 0, flexibleSeconds = 0;
-        for (int k = 0; k < 10; k++)
-            for (Context* c : {&rigid, &flexible}) {
-                const auto t = Clock::now();
-                c->setPositions(start);
-                c->computeVirtualSites();
-                c->getState(State::Forces | State::Energy, false, c->getIntegrator().getIntegrationForceGroups());
-                (c == &rigid ? rigidSeconds : flexibleSeconds) += std::chrono::duration<double>(Clock::now() - t).count();
-            }
-        std::printf("# %s: one evaluation's Context work, alternated 10 times: MRattleIntegrator's Context / "
-                    "VerletIntegrator's = %.3f (%.2f ms / %.2f ms)\n", name.c_str(), rigidSeconds / flexibleSeconds,
-                    rigidSeconds * 100, flexibleSeconds * 100);
         if (mine.iterations > 0 && openmm.iterations > 0)
             std::printf("# %s: cost per iteration, RigidBodyMinimizer / LocalEnergyMinimizer = %.3f; per evaluation "
                         "%.3f\n", name.c_str(), (mine.seconds / mine.iterations) / (openmm.seconds / openmm.iterations),

@@ -2,17 +2,16 @@
 """The benchmark suite behind docs/results.md, run through its one door, ./benchmarks/run.sh TARGET:
 
     paper                   M-RATTLE against the splitting method: accuracy, cost, sampling, drift
-    validate-langevin       MRattleLangevinIntegrator against LangevinMiddle + SETTLE (also docs/results/langevin.md)
+    validate-langevin       MRattleLangevinIntegrator against LangevinMiddle + SETTLE
     validate-equipartition  rigid water, translational against rotational temperature
     validate-thermostats    Nose-Hoover chain and CSVR on rigid water [--study step-sizes|density|equipartition]
-    validate-minimization, validate-minimization-starts, validate-far-shapes   studies with options of their own
+    validate-minimization, validate-minimization-starts   studies with options of their own
 
 --quick: tiny runs written to a scratch folder (a smoke test); --only: some parts of a target.
 Every table and plot in docs/results.md comes from these runs; report.py writes the markdown
 (a partial run replaces only its own sections, stamped).
 """
 import argparse
-import csv
 import os
 import sys
 import time
@@ -22,8 +21,7 @@ ROOT = os.path.dirname(os.path.dirname(HERE))
 TARGETS = {"paper": ("accuracy", "cost", "sampling", "drift"),
            "validate-langevin": ("langevin",), "validate-equipartition": ("equipartition",),
            "validate-thermostats": ("thermostats",)}
-STUDIES = {"validate-minimization": "minimization", "validate-minimization-starts": "minimization_starts",
-           "validate-far-shapes": "far_shapes"}  # modules of suite/ with a main(argv) of their own
+STUDIES = {"validate-minimization": "compare", "validate-minimization-starts": "starts"}  # of suite/minimization.py
 
 
 def parse(argv):
@@ -36,9 +34,6 @@ def parse(argv):
     thermostats = p.add_argument_group("validate-thermostats")
     thermostats.add_argument("--study", choices=("step-sizes", "density", "equipartition"),
                              help="a follow-up study instead of the main runs (its CSV only; equipartition: its rows)")
-    thermostats.add_argument("--steps", help="comma-separated step sizes in fs (default: the study's)")
-    thermostats.add_argument("--ps", type=float, help="the production length of each run of a study (ps)")
-    thermostats.add_argument("--methods", help="with --study step-sizes: comma-separated methods")
     thermostats.add_argument("--report-from", help="report a finished run from its CSV instead of running")
     thermostats.add_argument("--threads", type=int, default=1, help="CPU platform threads")
     return p.parse_args(argv)
@@ -50,16 +45,18 @@ def main(argv=None):
         build = argv[argv.index("--build") + 1] if "--build" in argv else os.path.join(ROOT, "build")
         rest = [a for i, a in enumerate(argv[1:], 1) if a != "--build" and (i < 2 or argv[i - 1] != "--build")]
         sys.path[:0] = [os.path.join(build, "python"), HERE]
-        import importlib
-        study = importlib.import_module("suite." + STUDIES[argv[0]])
-        return study.main(rest + (["--build", build] if "minimization" in argv[0] else []))
+        from suite import minimization
+        return getattr(minimization, STUDIES[argv[0]])(rest + ["--build", build])
     args = parse(argv)
     sys.path[:0] = [os.path.join(args.build, "python"), HERE]
     from suite import accuracy, cost, langevin, long_drift, sampling
+    from suite.common import write_csv
     import report
 
     out = args.out or (os.path.join(args.build, "results-quick") if args.quick else os.path.join(ROOT, "docs"))
     results_dir = os.path.join(out, "results")
+    # The paper's rows go to the build (docs/results/ holds what the documents cite), or beside the report with --out.
+    rows_dir = results_dir if args.out or args.quick else os.path.join(args.build, "results")
     os.makedirs(results_dir, exist_ok=True)
     all_parts = TARGETS[args.target]
     parts = set(args.only.split(",")) if args.only else set(all_parts)
@@ -73,26 +70,23 @@ def main(argv=None):
 
     if "cost" in parts:
         # First, while the machine is quietest: timings.
-        log("cost: step_cost")
-        binary = os.path.join(args.build, "benchmarks", "cpp", "step_cost")
-        timings, ratios = cost.run_step_cost(
-            binary, ["Reference", "CPU"], [100, 1000, 3000] if not q else [50],
-            [3, 5, 12, 30] if not q else [3, 5], 7 if not q else 2, 0.1 if not q else 0.01, log,
-            threads=[1, 2])
-        write_csv(os.path.join(results_dir, "cost_step_times.csv"), timings)
-        write_csv(os.path.join(results_dir, "cost_ratios.csv"), ratios)
+        log("cost: the integrators' own cost per step, forces excluded")
+        timings, ratios = cost.run(["Reference", "CPU"], [100, 1000, 3000] if not q else [50],
+                                   [3, 5, 12, 30] if not q else [3, 5], 7 if not q else 2, 0.1 if not q else 0.01, log,
+                                   threads=[1, 2])
+        write_csv(os.path.join(rows_dir, "cost_step_times.csv"), timings)
+        write_csv(os.path.join(rows_dir, "cost_ratios.csv"), ratios)
         cost.plot(timings, os.path.join(results_dir, "cost_step_times.png"))
-        from suite import paper_cost
         log("cost: the paper's systems (one benzene, the 27-benzene cluster), forces included")
-        prows = paper_cost.compare(["Reference", "CPU"], 7 if not q else 1, 0.2 if not q else 0.01, log)
-        write_csv(os.path.join(results_dir, "cost_paper_systems.csv"), prows)
+        prows = cost.paper_systems(["Reference", "CPU"], 7 if not q else 1, 0.2 if not q else 0.01, log)
+        write_csv(os.path.join(rows_dir, "cost_paper_systems.csv"), prows)
         md += report.cost_section(timings, ratios, prows)
 
     if "accuracy" in parts:
         log("accuracy: isolated benzene")
         steps = [0.5, 1, 2, 4, 8]
         iso = accuracy.isolated_benzene(steps if not q else [1, 2], 2.048 if not q else 0.064, log)
-        write_csv(os.path.join(results_dir, "accuracy_isolated_benzene.csv"), iso)
+        write_csv(os.path.join(rows_dir, "accuracy_isolated_benzene.csv"), iso)
         accuracy.plot_isolated(iso, os.path.join(results_dir, "accuracy_isolated_benzene.png"))
 
         log("accuracy: 27-benzene cluster")
@@ -106,19 +100,19 @@ def main(argv=None):
         rows += accuracy.energy_vs_step("27 tetrahedral 5-site", tsys, tx, tv, tbodies,
                                         ["M-RATTLE", "splitting", "RATTLE (CustomIntegrator)", "Verlet + CCMA"],
                                         steps if not q else [1, 2], 4.0 if not q else 0.1, log, platform="Reference")
-        write_csv(os.path.join(results_dir, "accuracy_energy_vs_step.csv"), rows)
+        write_csv(os.path.join(rows_dir, "accuracy_energy_vs_step.csv"), rows)
         accuracy.plot(rows, os.path.join(results_dir, "accuracy_energy_vs_step.png"), "Energy fluctuation against step size")
         order_rows = accuracy.orders(rows)
         log("accuracy: planar benzene under OpenMM's distance constraints")
         planar = accuracy.planar_benzene_with_constraints(0.5 if not q else 0.05, log)
-        write_csv(os.path.join(results_dir, "accuracy_planar_constraints.csv"), planar)
+        write_csv(os.path.join(rows_dir, "accuracy_planar_constraints.csv"), planar)
         log("accuracy: which 9-constraint sets OpenMM's CCMA converges on")
         ccma = accuracy.ccma_subsets(log)
-        write_csv(os.path.join(results_dir, "accuracy_ccma_subsets.csv"), ccma)
+        write_csv(os.path.join(rows_dir, "accuracy_ccma_subsets.csv"), ccma)
         log("accuracy: time reversibility (forward, reverse the velocities, back)")
         rev_steps = [10, 1000] if not q else [10, 50]
         rev = accuracy.reversibility(rev_steps, 2.0, log)
-        write_csv(os.path.join(results_dir, "accuracy_reversibility.csv"), rev)
+        write_csv(os.path.join(rows_dir, "accuracy_reversibility.csv"), rev)
         md += report.accuracy_section(iso, rows, order_rows, planar, ccma, q)
         md += report.reversibility_section(rev, rev_steps)
 
@@ -128,7 +122,7 @@ def main(argv=None):
         per_run, eq, step = (24.0, 4.0, 4.0) if not q else (0.8, 0.2, 4.0)
         res = {m: sampling.run_many(m, seeds, per_run, eq, step, 200.0, log) for m in ("M-RATTLE", "splitting")}
         srows = sampling.compare(res)
-        write_csv(os.path.join(results_dir, "sampling_comparison.csv"), srows)
+        write_csv(os.path.join(rows_dir, "sampling_comparison.csv"), srows)
         sampling.plot(res, os.path.join(results_dir, "sampling_histograms.png"))
         md += report.sampling_section(srows, len(seeds), per_run, eq, step, q)
 
@@ -139,17 +133,14 @@ def main(argv=None):
         dplan, deq, dsample, dradius, dtemp = ({4.0: (200.0, [1, 2]), 2.0: (100.0, [1])}, 100.0, 0.1, 2.0, 200.0) \
             if not q else ({4.0: (0.4, [1])}, 0.4, 0.02, 2.0, 200.0)
         drows = long_drift.run(dtemp, dplan, deq, dsample, dradius, log)
-        write_csv(os.path.join(results_dir, "long_drift.csv"),
+        write_csv(os.path.join(rows_dir, "long_drift.csv"),
                   [{k: v for k, v in r.items() if not k.startswith("series_")} for r in drows])
         long_drift.plot(drows, os.path.join(results_dir, "long_drift.png"))
         md += report.long_drift_section(drows, dtemp, deq, dsample, dradius)
 
     if "langevin" in parts:
         log("langevin: validation against LangevinMiddle + SETTLE (water NVT, NPT; liquid benzene)")
-        section = langevin.run(q, os.path.join(results_dir, "langevin"), log)
-        with open(os.path.join(results_dir, "langevin.md"), "w") as stream:
-            stream.write("\n".join(section) + "\n")
-        md += section
+        md += langevin.run(q, os.path.join(results_dir, "langevin"), log)
 
     if "equipartition" in parts:
         log("equipartition: rigid TIP3P and SPC/E water, NVE at 0.5-4 fs (translational against rotational T)")
@@ -167,21 +158,6 @@ def main(argv=None):
     command = [a for i, a in enumerate(argv) if a != "--build" and (i == 0 or argv[i - 1] != "--build")]
     report.write(path, md, " ".join(command), (time.time() - started) / 60)
     log("wrote %s" % path)
-
-
-def write_csv(path, rows):
-    # Keep plain values; drop live objects (an NVE run's Context and Integrator).
-    plain = (str, int, float, bool, tuple, list, type(None))
-    rows = [{k: v for k, v in r.items() if isinstance(v, plain) or hasattr(v, "dtype")} for r in rows]
-    if not rows:
-        return
-    keys = []
-    for r in rows:  # every column any row has, in first-seen order
-        keys += [k for k in r if k not in keys]
-    with open(path, "w", newline="") as f:
-        w = csv.DictWriter(f, fieldnames=keys, restval="")
-        w.writeheader()
-        w.writerows(rows)
 
 
 if __name__ == "__main__":

@@ -1,6 +1,7 @@
 """What keeps the benchmark suite's figures honest: its error bars and verdicts (block averages, drift
-standard errors, pooled and combined errors, fits), its degree-of-freedom count, and one quick run of the
-paper's accuracy part, whose numbers must say that M-RATTLE is RATTLE."""
+standard errors, pooled and combined errors, fits), its degree-of-freedom count, every configuration of the
+cost part running and staying finite, and one quick run of the paper's accuracy part, whose numbers must say
+that M-RATTLE is RATTLE."""
 import csv
 import math
 import os
@@ -63,6 +64,14 @@ def test_quick_accuracy_part_finds_m_rattle_is_rattle(tmp_path):
             assert float(r["error_after_10"]) < 1e-13, r
         elif "tolerance 1e-08" in r["method"]:
             assert float(r["error_after_10"]) > 1e-11, r
+
+
+def test_every_cost_configuration_runs_and_stays_finite():
+    from suite import cost
+    timings, _ = cost.run(["Reference", "CPU"], [8], [3, 5], 1, 0.001, lambda message: None, threads=[1, 2])
+    assert {r["integrator"] for r in timings} == {"verlet", "mrattle", "splitting", "mrattle_allpairs", "verlet_ccma",
+                                                  "verlet_settle"}
+    assert all(r["finite"] == "yes" for r in timings)
 
 
 def test_drift_standard_error_covers_the_true_slope():
@@ -162,7 +171,7 @@ def test_every_method_counts_degrees_of_freedom_with_the_package():
 
 
 def sampled(method, step_fs, potential, se=0.03):
-    kT = thermostats.langevin.KB * thermostats.TEMPERATURE
+    kT = thermostats.KB * thermostats.TEMPERATURE
     return dict(method=method, step_fs=step_fs, ps=20.0, potential_per_molecule=potential,
                 potential_per_molecule_se=se, kinetic_mean=0.5 * 5367 * kT, kinetic_mean_se=1.0)
 

@@ -112,11 +112,11 @@ def test_langevin_parts_use_its_half_step_velocities():
 
 
 def test_benchmark_suite_formula_is_the_integrators():
-    """benchmarks/python/suite/equipartition.py splits every integrator's velocities itself: on
+    """The benchmark suite (benchmarks/python/suite/common.py) splits every integrator's velocities itself: on
     M-RATTLE's (rigid) velocities it gives the integrator's own numbers; on velocities that are
     not rigid it first projects them, which keeps the translational part."""
     sys.path.insert(0, os.path.join(ROOT, 'benchmarks', 'python'))
-    from suite import equipartition
+    from suite import common
     simulation = waterSimulation(openmm.Platform.getPlatformByName('Reference'))
     simulation.context.setVelocitiesToTemperature(300*unit.kelvin, 8)
     simulation.step(3)
@@ -126,14 +126,14 @@ def test_benchmark_suite_formula_is_the_integrators():
     bodies = simulation.integrator.getBodiesInEffect()
     v = state.getVelocities(asNumpy=True).value_in_unit(unit.nanometers/unit.picosecond)
     x = state.getPositions(asNumpy=True).value_in_unit(unit.nanometers)
-    translational, rotational = equipartition.rigid_split(v, x, masses, bodies)
+    translational, rotational = common.rigid_split(v, masses, bodies, x)
     integrator = simulation.integrator
     assert translational == pytest.approx(integrator.computeTranslationalKineticEnergy().value_in_unit(
         unit.kilojoules_per_mole), rel=1e-10)
     assert rotational == pytest.approx(integrator.computeRotationalKineticEnergy().value_in_unit(
         unit.kilojoules_per_mole), rel=1e-8)
     noisy = v + np.random.default_rng(1).normal(0, 0.3, v.shape)
-    assert equipartition.rigid_split(noisy, x, masses, bodies, project=False)[0] == pytest.approx(
-        equipartition.rigid_split(noisy, x, masses, bodies)[0], rel=1e-12)
-    assert equipartition.rigid_split(noisy, x, masses, bodies)[1] < equipartition.rigid_split(
-        noisy, x, masses, bodies, project=False)[1]
+    assert common.rigid_split(noisy, masses, bodies)[0] == pytest.approx(
+        common.rigid_split(noisy, masses, bodies, x)[0], rel=1e-12)
+    assert common.rigid_split(noisy, masses, bodies, x)[1] < common.rigid_split(
+        noisy, masses, bodies)[1]

@@ -9,10 +9,6 @@ import mrattle
 from . import common, stats
 
 
-def _copy(system):
-    return openmm.XmlSerializer.deserialize(openmm.XmlSerializer.serialize(system))
-
-
 def _positions(model):
     return np.array(model.positions.value_in_unit(unit.nanometer))
 
@@ -21,11 +17,11 @@ def _bodies(model):
     return common.benzene_bodies(model.system.getNumParticles())
 
 
-def _angular_momentum(state, system):
-    x = state.getPositions(asNumpy=True).value_in_unit(unit.nanometer)
-    v = state.getVelocities(asNumpy=True).value_in_unit(unit.nanometer / unit.picosecond)
-    m = np.array([system.getParticleMass(i).value_in_unit(unit.dalton) for i in range(system.getNumParticles())])
-    return (m[:, None] * np.cross(x, v)).sum(0)
+def _angular_momentum(system, state=None, x=None, v=None):
+    if state is not None:
+        x = state.getPositions(asNumpy=True).value_in_unit(unit.nanometer)
+        v = state.getVelocities(asNumpy=True).value_in_unit(unit.nanometer / unit.picosecond)
+    return (common.masses(system)[:, None] * np.cross(x, v)).sum(0)
 
 
 def benzene_start():
@@ -60,13 +56,13 @@ def isolated_benzene(steps_fs, total_ps, log):
     total_ps = max(1, round(total_ps / 0.032)) * 0.032
     ref = common.nve_run(system, x0, v0, "M-RATTLE", reference_step, total_ps, total_ps, "Reference", bodies)
     ref_positions = ref["context"].getState(getPositions=True).getPositions(asNumpy=True).value_in_unit(unit.nanometer)
-    L0 = _angular_momentum(_initial_state(system, x0, v0), system)
+    L0 = _angular_momentum(system, x=x0, v=v0)
     rows = []
     for method in ("M-RATTLE", "splitting"):
         for h in steps_fs:
             run = common.nve_run(system, x0, v0, method, h * common.FS, total_ps, 0.032, "Reference", bodies)
             state = run["context"].getState(getPositions=True, getVelocities=True)
-            L = _angular_momentum(state, system)
+            L = _angular_momentum(system, state)
             e = run["total"]
             rows.append({
                 "system": "isolated benzene", "method": method, "step_fs": h,
@@ -79,13 +75,6 @@ def isolated_benzene(steps_fs, total_ps, log):
             log("  isolated benzene %-9s h=%4.1f fs  |dE|/E=%.2e  |dL|/L=%.2e  x err=%.2e nm" % (
                 method, h, rows[-1]["energy_rel_error"], rows[-1]["angmom_rel_error"], rows[-1]["position_error_nm"]))
     return rows
-
-
-def _initial_state(system, x, v):
-    context = openmm.Context(system, openmm.VerletIntegrator(0.001), openmm.Platform.getPlatformByName("Reference"))
-    context.setPositions(x)
-    context.setVelocities(v)
-    return context.getState(getPositions=True, getVelocities=True)
 
 
 def energy_vs_step(label, system, positions, velocities, bodies, methods, steps_fs, total_ps, log, platform="CPU"):
@@ -146,7 +135,7 @@ def planar_benzene_with_constraints(total_ps, log):
     all_pairs = [(i, j) for i in range(12) for j in range(i + 1, 12)]
     rows = []
     for name, pairs in (("30 bond+angle distances", bonded + angles), ("all 66 pair distances", all_pairs)):
-        system = _copy(model.system)
+        system = openmm.XmlSerializer.deserialize(openmm.XmlSerializer.serialize(model.system))
         for body in bodies:
             for i, j in pairs:
                 system.addConstraint(body[i], body[j], float(np.linalg.norm(sites[i] - sites[j])))
@@ -167,9 +156,7 @@ def planar_benzene_with_constraints(total_ps, log):
 
 
 def plot(rows, path, title):
-    import matplotlib
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
+    plt = common.pyplot()
     systems = sorted({r["system"] for r in rows})
     fig, axes = plt.subplots(1, len(systems), figsize=(5.2 * len(systems), 4.2), squeeze=False)
     for ax, system in zip(axes[0], systems):
@@ -188,15 +175,11 @@ def plot(rows, path, title):
         ax.set_title(system)
         ax.legend(fontsize=8)
     fig.suptitle(title)
-    fig.tight_layout()
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
+    common.save_figure(fig, path)
 
 
 def plot_isolated(rows, path):
-    import matplotlib
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
+    plt = common.pyplot()
     fig, axes = plt.subplots(1, 2, figsize=(10, 4))
     for method in ("M-RATTLE", "splitting"):
         pts = sorted((r["step_fs"], r["energy_rel_error"], r["position_error_nm"]) for r in rows if r["method"] == method)
@@ -208,9 +191,7 @@ def plot_isolated(rows, path):
         ax.set_xlabel("step size (fs)")
         ax.legend()
     fig.suptitle("Isolated rigid benzene (free rotor)")
-    fig.tight_layout()
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
+    common.save_figure(fig, path)
 
 
 def ccma_subsets(log):
@@ -246,9 +227,7 @@ def _projected_kinetic_energy(sites, masses, velocities, pairs, how):
         integrator.addRigidBody(list(range(len(masses))))
     else:
         integrator = openmm.VerletIntegrator(0.001)
-    context = openmm.Context(system, integrator, openmm.Platform.getPlatformByName("Reference"))
-    context.setPositions(sites)
-    context.setVelocities(velocities)
+    context = common.context(system, integrator, sites, velocities, "Reference")
     if how != "M-RATTLE":
         try:
             context.applyVelocityConstraints(1e-8)
@@ -265,9 +244,7 @@ def _forward_and_back(system, positions, velocities, method, step_ps, steps, bod
     irreversibility plus round-off (and, for CCMA, its constraint tolerance).
     """
     integrator = common.make_integrator(method, step_ps, tolerance, bodies)
-    context = openmm.Context(system, integrator, openmm.Platform.getPlatformByName("Reference"))
-    context.setPositions(positions)
-    context.setVelocities(velocities)
+    context = common.context(system, integrator, positions, velocities, "Reference")
     context.applyConstraints(tolerance)  # start exactly on the constraint surface for every method
     context.applyVelocityConstraints(tolerance)
     x0 = context.getState(getPositions=True).getPositions(asNumpy=True).value_in_unit(unit.nanometer)
@@ -278,8 +255,7 @@ def _forward_and_back(system, positions, velocities, method, step_ps, steps, bod
         # OpenMM's VerletIntegrator is leapfrog: it stores v(t - dt/2), so the reversed run
         # must start from -v(t + dt/2) = -(v(t - dt/2) + dt f(t)/m).
         f = state.getForces(asNumpy=True).value_in_unit(unit.kilojoule_per_mole / unit.nanometer)
-        m = np.array([system.getParticleMass(i).value_in_unit(unit.dalton) for i in range(system.getNumParticles())])
-        v = v + step_ps * f / m[:, None]
+        v = v + step_ps * f / common.masses(system)[:, None]
     context.setVelocities(-v)
     integrator.step(steps)
     x = context.getState(getPositions=True).getPositions(asNumpy=True).value_in_unit(unit.nanometer)

@@ -1,5 +1,8 @@
-"""Shared pieces of the benchmark suite: integrators by name, NVE runs, test molecules."""
+"""Shared pieces of the benchmark suite: integrators by name, NVE runs, test molecules, rigid water,
+block statistics, CSV files and figures."""
+import csv
 import math
+import os
 import time
 
 import numpy as np
@@ -9,6 +12,8 @@ from openmm import unit
 import mrattle
 
 FS = 0.001  # ps
+KB = 0.00831446261815324  # kJ/mol/K
+TEMPERATURE = 300.0  # K, the water studies'
 
 
 def platform(name, threads=None):
@@ -17,6 +22,17 @@ def platform(name, threads=None):
     if name == "CPU" and threads is not None:
         properties["Threads"] = str(threads)
     return openmm.Platform.getPlatformByName(name), properties
+
+
+def context(system, integrator, positions, velocities=None, platform_name="CPU", threads=None):
+    """A Context at `positions` with `velocities`: an array, or (temperature, seed) for thermal ones."""
+    c = openmm.Context(system, integrator, *platform(platform_name, threads))
+    c.setPositions(positions)
+    if isinstance(velocities, tuple):
+        c.setVelocitiesToTemperature(*velocities)
+    elif velocities is not None:
+        c.setVelocities(velocities)
+    return c
 
 
 def make_integrator(method, step_ps, tolerance=1e-10, bodies=None):
@@ -54,14 +70,10 @@ def nve_run(system, positions, velocities, method, step_ps, total_ps, sample_ps,
     and is reported in 'failure'.
     """
     integrator = make_integrator(method, step_ps, tolerance, bodies)
-    plat, props = platform(platform_name, threads)
-    context = openmm.Context(system, integrator, plat, props)
-    context.setPositions(positions)
-    if velocities is not None:
-        context.setVelocities(velocities)
+    context_ = context(system, integrator, positions, velocities, platform_name, threads)
     stride = max(1, int(round(sample_ps / step_ps)))
     samples = max(1, int(round(total_ps / (stride * step_ps))))
-    dof = mrattle.degreesOfFreedom(context)
+    dof = mrattle.degreesOfFreedom(context_)
     times, kinetic, potential, rigidity = [], [], [], []
     reference = None
     failure = None
@@ -73,7 +85,7 @@ def nve_run(system, positions, velocities, method, step_ps, total_ps, sample_ps,
             except Exception as error:  # OpenMM's constraint failures arrive as exceptions
                 failure = str(error).splitlines()[0]
                 break
-        state = context.getState(getEnergy=True, getPositions=bodies is not None)
+        state = context_.getState(getEnergy=True, getPositions=bodies is not None)
         ke = state.getKineticEnergy().value_in_unit(unit.kilojoule_per_mole)
         pe = state.getPotentialEnergy().value_in_unit(unit.kilojoule_per_mole)
         if not (math.isfinite(ke) and math.isfinite(pe)):
@@ -96,7 +108,7 @@ def nve_run(system, positions, velocities, method, step_ps, total_ps, sample_ps,
     return {
         "time": np.array(times), "kinetic": kinetic, "potential": potential, "total": kinetic + potential,
         "rigidity": np.array(rigidity), "dof": dof, "wall": wall, "steps": len(times) and (len(times) - 1) * stride,
-        "failure": failure, "context": context, "integrator": integrator,
+        "failure": failure, "context": context_, "integrator": integrator,
     }
 
 
@@ -114,7 +126,7 @@ def tetrahedral_sites():
 TETRAHEDRAL_PAIRS = [(0, 2), (0, 3), (0, 4), (1, 2), (1, 3), (1, 4), (2, 3), (2, 4), (3, 4), (0, 1)]
 
 
-def tetrahedral_cluster(num_per_side=3, spacing=0.55, seed=7, constraints=None, temperature=200.0):
+def tetrahedral_cluster(num_per_side=3, spacing=0.55, seed=7, constraints=None):
     """N^3 rigid tetrahedral molecules in vacuum with LJ + charges between molecules.
 
     constraints: None, or the number of intra-molecular pair distances to declare as
@@ -128,8 +140,7 @@ def tetrahedral_cluster(num_per_side=3, spacing=0.55, seed=7, constraints=None, 
     system = openmm.System()
     nb = openmm.NonbondedForce()
     nb.setNonbondedMethod(openmm.NonbondedForce.NoCutoff)
-    positions, bodies = [], []
-    pairs = TETRAHEDRAL_PAIRS
+    positions, bodies, pairs = [], [], TETRAHEDRAL_PAIRS
     for a in range(num_per_side):
         for b in range(num_per_side):
             for c in range(num_per_side):
@@ -181,7 +192,6 @@ def machine_description():
                     break
     except OSError:
         pass
-    import os
     return "%s, %d cores visible, OpenMM %s" % (model, os.cpu_count() or 0, openmm.Platform.getOpenMMVersion())
 
 
@@ -201,3 +211,130 @@ def interleaved_median(integrators, steps, batches):
             integrator.step(steps[name])
             seconds[name].append((time.perf_counter() - start) / steps[name])
     return {name: statistics.median(values) for name, values in seconds.items()}
+
+
+def masses(system):
+    """The particles' masses (daltons)."""
+    return np.array([system.getParticleMass(i).value_in_unit(unit.dalton) for i in range(system.getNumParticles())])
+
+
+def block_mean(values, blocks=10):
+    """Mean and its standard error from block averages."""
+    values = np.asarray(values, dtype=float)
+    n = len(values) // blocks
+    means = values[:n * blocks].reshape(blocks, n).mean(axis=1)
+    return means.mean(), means.std(ddof=1) / math.sqrt(blocks)
+
+
+def write_csv(path, rows, columns=None):
+    """Rows as CSV: every column any row has, in first-seen order (or `columns`); live objects (an NVE
+    run's Context and Integrator) dropped."""
+    if not rows and not columns:
+        return
+    plain = (str, int, float, bool, tuple, list, type(None))
+    rows = [{k: v for k, v in r.items() if isinstance(v, plain) or hasattr(v, "dtype")} for r in rows]
+    keys = list(columns or [])
+    for r in rows if columns is None else []:
+        keys += [k for k in r if k not in keys]
+    os.makedirs(os.path.dirname(os.path.abspath(path)), exist_ok=True)
+    with open(path, "w", newline="") as f:
+        w = csv.DictWriter(f, fieldnames=keys, restval="", extrasaction="ignore")
+        w.writeheader()
+        w.writerows(rows)
+
+
+def read_csv(path, text=("method", "model", "failure")):
+    """A CSV's rows, numbers as floats but the `text` columns, empty cells dropped."""
+    with open(path) as f:
+        return [{k: (v if k in text else float(v)) for k, v in r.items() if v != ""} for r in csv.DictReader(f)]
+
+
+def pyplot():
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    return plt
+
+
+def save_figure(fig, path):
+    fig.tight_layout()
+    fig.savefig(path, dpi=110)
+    pyplot().close(fig)
+
+
+def water(pdb_name="tip3p.pdb", forcefield_name="amber14/tip3p.xml", barostat_seed=None):
+    """A rigid water box of OpenMM's app/data with PME (0.9 nm), its waters at the model's exact geometry
+    (SETTLE through applyConstraints: M-RATTLE keeps the shapes it is given), and the bodies; with a
+    MonteCarloBarostat (1 bar, 300 K, every 25 steps) if a barostat_seed is given (0: OpenMM picks one)."""
+    from openmm import app
+    pdb = app.PDBFile(os.path.join(os.path.dirname(app.__file__), "data", pdb_name))
+    system = app.ForceField(forcefield_name).createSystem(pdb.topology, nonbondedMethod=app.PME,
+                                                          nonbondedCutoff=0.9 * unit.nanometers, rigidWater=True)
+    if barostat_seed is not None:
+        barostat = openmm.MonteCarloBarostat(1 * unit.bar, TEMPERATURE * unit.kelvin, 25)
+        barostat.setRandomNumberSeed(barostat_seed)
+        system.addForce(barostat)
+    context = openmm.Context(system, openmm.VerletIntegrator(0.001), openmm.Platform.getPlatformByName("Reference"))
+    context.setPositions(pdb.positions)
+    context.applyConstraints(1e-12)
+    return system, context.getState(getPositions=True).getPositions(), mrattle.rigidBodies(pdb.topology, system)
+
+
+def equilibrate(system, positions, ps, threads, seed=11):
+    """LangevinMiddle + SETTLE at 300 K, 1/ps, 2 fs: the start of every run of a water study. Under a
+    barostat the System's default box becomes the one reached, so that runs start in it."""
+    integrator = openmm.LangevinMiddleIntegrator(TEMPERATURE * unit.kelvin, 1 / unit.picosecond, 2 * unit.femtoseconds)
+    integrator.setRandomNumberSeed(seed)
+    c = context(system, integrator, positions, (TEMPERATURE * unit.kelvin, seed), "CPU", threads)
+    integrator.step(int(round(ps / 0.002)))
+    state = c.getState(getPositions=True, getVelocities=True)
+    system.setDefaultPeriodicBoxVectors(*state.getPeriodicBoxVectors())
+    return state.getPositions(asNumpy=True), state.getVelocities(asNumpy=True)
+
+
+def water_integrator(method, step_fs, seed=5, thermostat_frequency=10.0):
+    """The water studies' integrators by name, at 300 K (the thermostats 10/ps, the Langevin ones 1/ps)."""
+    step = step_fs * unit.femtoseconds
+    if method in ("M-RATTLE", "M-RATTLE NVE"):
+        return mrattle.MRattleIntegrator(step)
+    if method == "Verlet + SETTLE":
+        return openmm.VerletIntegrator(step)
+    if method == "M-RATTLE Nose-Hoover chain":
+        return mrattle.MRattleNoseHooverIntegrator(TEMPERATURE, thermostat_frequency, step)
+    integrator = {"M-RATTLE CSVR": lambda: mrattle.MRattleBussiIntegrator(TEMPERATURE, thermostat_frequency, step),
+                  "LangevinMiddle + SETTLE": lambda: openmm.LangevinMiddleIntegrator(TEMPERATURE, 1.0, step),
+                  "M-RATTLE Langevin": lambda: mrattle.MRattleLangevinIntegrator(TEMPERATURE, 1.0, step)}[method]()
+    integrator.setRandomNumberSeed(seed)
+    return integrator
+
+
+def rigid_split(velocities, masses, bodies, positions=None):
+    """Translational and rotational kinetic energy of equal-size bodies (kJ/mol): 1/2 M V^2 per body and the
+    rest, sum m |v - V|^2 / 2, the formula RigidBodyIntegrator.computeTranslationalKineticEnergy() uses; given
+    the positions, each body's velocities are first made rigid there (the mass-weighted projection, RATTLE's
+    velocity step: the identity for velocities that are rigid already)."""
+    index = np.asarray(bodies)
+    m = masses[index]
+    mass = m.sum(axis=1)
+    v = velocities[index]
+    V = (m[..., None] * v).sum(axis=1) / mass[:, None]
+    relative = v - V[:, None, :]
+    if positions is not None:
+        x = positions[index]
+        a = x - ((m[..., None] * x).sum(axis=1) / mass[:, None])[:, None, :]
+        L = (m[..., None] * np.cross(a, relative)).sum(axis=1)
+        J = np.einsum("bk,bki,bkj->bij", m, a, a)
+        inertia = np.trace(J, axis1=1, axis2=2)[:, None, None] * np.eye(3) - J
+        relative = np.cross(np.linalg.solve(inertia, L[..., None])[..., 0][:, None, :], a)
+    return 0.5 * np.sum(mass * (V * V).sum(axis=1)), 0.5 * np.sum(m * (relative * relative).sum(axis=2))
+
+
+def temperatures(velocities, masses, bodies, removes_cm, positions=None):
+    """Translational and rotational temperature of rigid bodies (3 degrees of freedom each per body, a
+    CMMotionRemover's 3 taken from the translations), from rigid_split."""
+    kt, kr = rigid_split(velocities, masses, bodies, positions)
+    return 2 * kt / ((3 * len(bodies) - (3 if removes_cm else 0)) * KB), 2 * kr / (3 * len(bodies) * KB)
+
+
+def removes_cm(system):
+    return any(isinstance(f, openmm.CMMotionRemover) for f in system.getForces())

@@ -1,21 +1,7 @@
-"""Equipartition of rigid water between translation and rotation against the step size (issue 24).
-
-NVE runs of OpenMM's rigid TIP3P box (app/data/tip3p.pdb) and rigid SPC/E box (app/data/spce.pdb),
-from one equilibrated start per model (LangevinMiddle + SETTLE at 300 K), with MRattleIntegrator
-beside VerletIntegrator with SETTLE at 0.5, 1, 2, 3 and 4 fs, MRattleLangevinIntegrator at 2 and
-4 fs, and (TIP3P) the thermostats of issue 33, MRattleNoseHooverIntegrator and MRattleBussiIntegrator
-(suite/thermostats.py's settings), at 0.5 to 5 fs. The translational and rotational temperatures of every run come from the same formula
-(rigid_split: 1/2 M V^2 per molecule, the rest of its kinetic energy rotational, the
-CMMotionRemover's 3 degrees of freedom taken from the translations), on the on-step velocities of
-each integrator (for OpenMM's leapfrog VerletIntegrator rebuilt from its half-step ones), means and
-standard errors from block averages. Asthagiri & Beck (2024) found that NVE rigid SPC/E water reaches equipartition only
-at 0.5 fs, with the rotational temperature below the translational at 1-3 fs.
-
-    ./benchmarks/run.sh validate-equipartition
-    # the thermostats' rows alone, merged into docs/results/equipartition.csv and its section:
-    ./benchmarks/run.sh validate-thermostats --study equipartition
-"""
-import csv
+"""`./benchmarks/run.sh validate-equipartition`: translational against rotational temperature of rigid TIP3P
+and SPC/E water against the step size, NVE with MRattleIntegrator and Verlet + SETTLE, MRattleLangevinIntegrator,
+and (TIP3P; `validate-thermostats --study equipartition`) the thermostats; against Asthagiri & Beck (2024), who
+found NVE rigid SPC/E at equipartition only at 0.5 fs, T_rot below T_trans at 1-3 fs (the method: report())."""
 import math
 import multiprocessing
 import os
@@ -23,12 +9,10 @@ import sys
 import time
 
 import numpy as np
-import openmm
 from openmm import unit
 
-import mrattle
-
-from . import common, langevin
+from .common import (block_mean, context as start_context, equilibrate, masses as masses_of, read_csv, removes_cm,
+                     temperatures, water, water_integrator, write_csv)
 
 MODELS = (('TIP3P', 'tip3p.pdb', 'amber14/tip3p.xml'), ('SPC/E', 'spce.pdb', 'amber14/spce.xml'))
 NVE_STEPS_FS = (0.5, 1, 2, 3, 4)
@@ -37,46 +21,15 @@ METHODS = ('M-RATTLE', 'Verlet + SETTLE')
 THERMOSTATS = ('M-RATTLE Nose-Hoover chain', 'M-RATTLE CSVR')  # thermostats.METHODS' names
 THERMOSTAT_STEPS_FS = (0.5, 1, 2, 3, 4, 5)
 THERMOSTAT_MODELS = ('TIP3P',)  # issue 33's validation system
-TEMPERATURE = 300.0
 BLOCKS = 10
-
-
-def equilibrate(system, positions, ps, threads, seed=11):
-    """LangevinMiddle + SETTLE at 300 K, 1/ps, 2 fs: the start of every run of this model. Under a
-    barostat the System's default box becomes the one reached, so that runs start in it."""
-    integrator = openmm.LangevinMiddleIntegrator(TEMPERATURE * unit.kelvin, 1 / unit.picosecond, 2 * unit.femtoseconds)
-    integrator.setRandomNumberSeed(seed)
-    context = openmm.Context(system, integrator, *common.platform('CPU', threads))
-    context.setPositions(positions)
-    context.setVelocitiesToTemperature(TEMPERATURE * unit.kelvin, seed)
-    integrator.step(int(round(ps / 0.002)))
-    state = context.getState(getPositions=True, getVelocities=True)
-    system.setDefaultPeriodicBoxVectors(*state.getPeriodicBoxVectors())
-    return state.getPositions(asNumpy=True), state.getVelocities(asNumpy=True)
-
-
-def make_integrator(method, step_fs):
-    step = step_fs * unit.femtoseconds
-    if method == 'M-RATTLE':
-        return mrattle.MRattleIntegrator(step)
-    if method == 'M-RATTLE Langevin':
-        integrator = mrattle.MRattleLangevinIntegrator(TEMPERATURE * unit.kelvin, 1 / unit.picosecond, step)
-        integrator.setRandomNumberSeed(5)
-        return integrator
-    if method == 'Verlet + SETTLE':
-        return openmm.VerletIntegrator(step)
-    if method in THERMOSTATS:
-        from . import thermostats  # here: thermostats imports this module
-        return thermostats.make_integrator(method, step_fs)
-    raise ValueError('unknown method %r' % method)
 
 
 def against_published(result):
     """How a run compares with Asthagiri & Beck (2024): equipartition at 0.5 fs, T_rot < T_trans at 1-3 fs."""
     step = result['step_fs']
-    if result['failure'] is not None or step > 3:
+    if result.get('failure') or step > 3:
         return ''
-    d, e = result['difference']
+    d, e = result['Trot_minus_Ttrans'], result['difference_se']
     below, equal = d < -3 * e, abs(d) <= 3 * e
     if step == 0.5:
         return ' (consistent with it)' if equal else ' (differs from it)'
@@ -90,35 +43,16 @@ LENGTHS = (2.0, 0.3, 2.5, 10)
 MOLECULES = 895  # waters in each of OpenMM's tip3p.pdb and spce.pdb (for reporting kept rows)
 
 
-def rigid_split(velocities, positions, masses, bodies, project=True):
-    """Translational and rotational kinetic energy of the bodies (kJ/mol): each body's velocities
-    made rigid at the positions first (the mass-weighted projection, RATTLE's velocity step: the
-    identity for velocities that are rigid already), then 1/2 M V^2 and sum m |v - V|^2 / 2, the
-    formula RigidBodyIntegrator.computeTranslationalKineticEnergy() uses (project=False: that
-    formula on the velocities as they are). Bodies of equal size."""
-    index = np.asarray(bodies)
-    m = masses[index]
-    mass = m.sum(axis=1)
-    x, v = positions[index], velocities[index]
-    center = (m[..., None] * x).sum(axis=1) / mass[:, None]
-    V = (m[..., None] * v).sum(axis=1) / mass[:, None]
-    a = x - center[:, None, :]
-    L = (m[..., None] * np.cross(a, v - V[:, None, :])).sum(axis=1)
-    J = np.einsum('bk,bki,bkj->bij', m, a, a)
-    inertia = np.trace(J, axis1=1, axis2=2)[:, None, None] * np.eye(3) - J
-    omega = np.linalg.solve(inertia, L[..., None])[..., 0]
-    relative = np.cross(omega[:, None, :], a) if project else v - V[:, None, :]
-    return 0.5 * np.sum(mass * (V * V).sum(axis=1)), 0.5 * np.sum(m * (relative * relative).sum(axis=2))
-
-
 def summarize(model, method, step_fs, trans, rot, times, energy, failure, wall, steps, molecules):
-    result = dict(model=model, method=method, step_fs=step_fs, failure=failure, wall_s=wall, steps=steps)
+    """A run's row: T_trans, T_rot and their difference (block-averaged as one series: the two are
+    anticorrelated in NVE) with standard errors, and the energy's drift (kJ/mol per ns per molecule)."""
+    result = dict(model=model, method=method, step_fs=step_fs, failure=failure or '', wall_s=round(wall), steps=steps)
     if failure is None:
-        result['Ttrans'] = langevin.block_mean(trans, BLOCKS)
-        result['Trot'] = langevin.block_mean(rot, BLOCKS)
-        result['difference'] = langevin.block_mean(np.asarray(rot) - np.asarray(trans), BLOCKS)
-        slope = np.polyfit(times, energy, 1)[0] if len(times) > 1 else float('nan')
-        result['drift'] = slope * 1000 / molecules  # kJ/mol per ns per molecule
+        result['Ttrans'], result['Ttrans_se'] = block_mean(trans, BLOCKS)
+        result['Trot'], result['Trot_se'] = block_mean(rot, BLOCKS)
+        result['Trot_minus_Ttrans'], result['difference_se'] = block_mean(np.asarray(rot) - np.asarray(trans), BLOCKS)
+        result['drift_kJ_per_mol_ns_molecule'] = (np.polyfit(times, energy, 1)[0] if len(times) > 1
+                                                  else float('nan')) * 1000 / molecules
     return result
 
 
@@ -127,13 +61,9 @@ def run_one(model, system, bodies, start, method, step_fs, discard_ps, productio
     drift (a thermostat's: of the energy plus its heat bath's, the quantity it conserves). VerletIntegrator is leapfrog: its State velocities are half a step behind; its on-step
     velocities are v + (h/2) f/m made rigid (velocity Verlet's, i.e. RATTLE's), and a second
     result gives the State velocities as they are."""
-    integrator = make_integrator(method, step_fs)
-    context = openmm.Context(system, integrator, *common.platform('CPU', threads))
-    context.setPositions(start[0])
-    context.setVelocities(start[1])
-    masses = np.array([system.getParticleMass(i).value_in_unit(unit.dalton) for i in range(system.getNumParticles())])
-    removes_cm = any(isinstance(f, openmm.CMMotionRemover) for f in system.getForces())
-    dof_trans, dof_rot = 3 * len(bodies) - (3 if removes_cm else 0), 3 * len(bodies)
+    integrator = water_integrator(method, step_fs)
+    context = start_context(system, integrator, start[0], start[1], 'CPU', threads)
+    masses, cm = masses_of(system), removes_cm(system)
     leapfrog = method == 'Verlet + SETTLE'
     bath = getattr(integrator, 'computeHeatBathEnergy', lambda: 0 * unit.kilojoule_per_mole)
     stride = max(1, int(round(sample_fs / step_fs)))
@@ -150,18 +80,18 @@ def run_one(model, system, bodies, start, method, step_fs, discard_ps, productio
             v = state.getVelocities(asNumpy=True).value_in_unit(unit.nanometers / unit.picosecond)
             x = state.getPositions(asNumpy=True).value_in_unit(unit.nanometers)
             if leapfrog:
-                kt, kr = rigid_split(v, x, masses, bodies, project=False)
-                series['halfTrans'].append(2 * kt / (dof_trans * langevin.KB))
-                series['halfRot'].append(2 * kr / (dof_rot * langevin.KB))
+                tt, tr = temperatures(v, masses, bodies, cm)
+                series['halfTrans'].append(tt)
+                series['halfRot'].append(tr)
                 f = state.getForces(asNumpy=True).value_in_unit(unit.kilojoules_per_mole / unit.nanometer)
                 v = v + 0.5 * h * f / masses[:, None]
-            kt, kr = rigid_split(v, x, masses, bodies)
-            series['trans'].append(2 * kt / (dof_trans * langevin.KB))
-            series['rot'].append(2 * kr / (dof_rot * langevin.KB))
+            tt, tr = temperatures(v, masses, bodies, cm, x)
+            series['trans'].append(tt)
+            series['rot'].append(tr)
             series['time'].append(state.getTime().value_in_unit(unit.picosecond))
             series['energy'].append((state.getKineticEnergy() + state.getPotentialEnergy() + bath()).value_in_unit(
                 unit.kilojoule_per_mole))
-            if not math.isfinite(series['energy'][-1] + kt + kr):
+            if not math.isfinite(series['energy'][-1] + tt + tr):
                 raise ArithmeticError('energy not finite at %.2f ps' % series['time'][-1])
     except Exception as error:  # a blow-up ends the run and is reported
         failure = str(error).splitlines()[0]
@@ -177,9 +107,9 @@ def run_one(model, system, bodies, start, method, step_fs, discard_ps, productio
 
 def verdict(result):
     """What the error bars support about T_rot - T_trans (3 standard errors)."""
-    if result['failure'] is not None:
+    if result.get('failure'):
         return 'unstable: ' + result['failure']
-    d, e = result['difference']
+    d, e = result['Trot_minus_Ttrans'], result['difference_se']
     if abs(d) <= 3 * e:
         return 'equal within 3 SE (%+.1f +- %.1f K)' % (d, e)
     return 'rotational %s translational by %.1f +- %.1f K (%.0f SE)' % ('below' if d < 0 else 'above', abs(d), e,
@@ -188,13 +118,6 @@ def verdict(result):
 
 CSV_COLUMNS = ['model', 'method', 'step_fs', 'Ttrans', 'Ttrans_se', 'Trot', 'Trot_se', 'Trot_minus_Ttrans',
                'difference_se', 'drift_kJ_per_mol_ns_molecule', 'failure', 'steps', 'wall_s']
-
-
-def csv_row(r):
-    ok = r['failure'] is None
-    return [r['model'], r['method'], '%g' % r['step_fs']] + \
-        ([r['Ttrans'][0], r['Ttrans'][1], r['Trot'][0], r['Trot'][1], r['difference'][0], r['difference'][1],
-          r['drift']] if ok else [''] * 7) + [r['failure'] or '', r['steps'], '%.0f' % r['wall_s']]
 
 
 def model_runs(name, methods=None):
@@ -209,44 +132,33 @@ def model_runs(name, methods=None):
 
 
 def run_model(task):
-    """All runs of one model (in a process of its own), each appended to a partial CSV as it ends."""
-    name, pdb_name, forcefield_name, lengths, threads, partial, methods = task
+    """All runs of one model, in a process of its own."""
+    name, pdb_name, forcefield_name, lengths, threads, methods = task
     equilibrate_ps, discard_ps, production_ps, sample_fs = lengths
     began = time.time()
 
     def log(message):
         print('[%6.0f s] equipartition: %s' % (time.time() - began, message), file=sys.stderr, flush=True)
 
-    system, positions, bodies = langevin.water(pdb_name, forcefield_name)
+    system, positions, bodies = water(pdb_name, forcefield_name)
     start = equilibrate(system, positions, equilibrate_ps, threads)
     log('%s, %d waters, equilibrated %.1f ps' % (name, len(bodies), equilibrate_ps))
-    runs = model_runs(name, methods)
     rows = []
-    with open(partial, 'w', newline='') as stream:
-        csv.writer(stream).writerow(CSV_COLUMNS)
-    for method, step in runs:
-        for result in run_one(name, system, bodies, start, method, step, discard_ps, production_ps, sample_fs,
-                              threads):
-            log('%s %-17s %.1f fs: %s (%d steps in %.0f s)' % (name, result['method'], step, verdict(result),
-                                                                result['steps'], result['wall_s']))
-            rows.append(result)
-            with open(partial, 'a', newline='') as stream:
-                csv.writer(stream).writerow(csv_row(result))
+    for method, step in model_runs(name, methods):
+        rows += run_one(name, system, bodies, start, method, step, discard_ps, production_ps, sample_fs, threads)
+        log('%s %-17s %.1f fs: %s (%d steps in %.0f s)' % (name, method, step, verdict(rows[-1]), rows[-1]['steps'],
+                                                            rows[-1]['wall_s']))
     return len(bodies), rows
 
 
 def run(quick, out, log, threads=1, methods=None):
-    """Run every model and step size, the two models in two processes of one CPU thread each (on a
-    shared machine two single-thread processes lose less to waiting than one of two threads);
-    write out + '.csv'; return the report as markdown lines. Each model's runs are also appended
-    to out + '.partial-<model>.csv' as they end (removed at the end), so a run cut short keeps
-    what it has. With `methods`, only their runs (of the models that have them) are made, and they
-    replace their own rows in an existing out + '.csv', whose other rows are kept and reported."""
+    """Every model and step size, the two models in two processes of one CPU thread each (on a shared
+    machine two single-thread processes lose less to waiting than one of two threads); writes out + '.csv',
+    returns the report as markdown lines. With `methods`, only their runs are made, and they replace their
+    own rows in an existing out + '.csv', whose other rows are kept and reported."""
     lengths = (0.02, 0.01, 0.04, 4) if quick else LENGTHS
-    os.makedirs(os.path.dirname(os.path.abspath(out)), exist_ok=True)
-    tasks = [(name, pdb_name, forcefield_name, lengths, threads,
-              '%s.partial-%s.csv' % (out, name.replace('/', '')), methods)
-             for name, pdb_name, forcefield_name in MODELS if model_runs(name, methods)]
+    tasks = [(name, pdb, forcefield, lengths, threads, methods) for name, pdb, forcefield in MODELS
+             if model_runs(name, methods)]
     began = time.time()
     with multiprocessing.get_context('spawn').Pool(len(tasks)) as pool:
         results = pool.map(run_model, tasks)
@@ -255,16 +167,10 @@ def run(quick, out, log, threads=1, methods=None):
     rows = [row for result in results for row in result[1]]
     if methods is not None and os.path.exists(out + '.csv'):
         made = {(r['model'], r['method'], r['step_fs']) for r in rows}
-        kept = [r for r in rows_from_csv(out + '.csv') if (r['model'], r['method'], r['step_fs']) not in made]
+        kept = [r for r in read_csv(out + '.csv') if (r['model'], r['method'], r['step_fs']) not in made]
         rows = kept + rows
         by_model.update({r['model']: by_model.get(r['model'], MOLECULES) for r in kept})
-    with open(out + '.csv', 'w', newline='') as stream:
-        writer = csv.writer(stream)
-        writer.writerow(CSV_COLUMNS)
-        for row in rows:
-            writer.writerow(csv_row(row))
-    for task in tasks:
-        os.remove(task[-2])  # its partial CSV
+    write_csv(out + '.csv', rows, CSV_COLUMNS)
     return report(rows, by_model, quick, *lengths, threads)
 
 
@@ -296,12 +202,12 @@ def report(rows, by_model, quick, equilibrate_ps, discard_ps, production_ps, sam
     ranks = {method: k for k, method in enumerate(METHODS + (HALF_STEP, 'M-RATTLE Langevin') + THERMOSTATS)}
     rows = sorted(rows, key=lambda r: (order[r['model']], r['step_fs'], ranks[r['method']]))
     for r in rows:
-        if r['failure'] is not None:
+        if r.get('failure'):
             md.append('| %s | %g | %s | - | - | - | - | %s |' % (r['model'], r['step_fs'], r['method'], verdict(r)))
             continue
         md.append('| %s | %g | %s | %.1f +- %.1f | %.1f +- %.1f | %+.1f +- %.1f | %.3g | %s |' % (
-            r['model'], r['step_fs'], r['method'], r['Ttrans'][0], r['Ttrans'][1], r['Trot'][0], r['Trot'][1],
-            r['difference'][0], r['difference'][1], r['drift'], verdict(r)))
+            r['model'], r['step_fs'], r['method'], r['Ttrans'], r['Ttrans_se'], r['Trot'], r['Trot_se'],
+            r['Trot_minus_Ttrans'], r['difference_se'], r['drift_kJ_per_mol_ns_molecule'], verdict(r)))
     md.append('')
     md.append('Per step size, NVE (3 SE as the threshold), against Asthagiri & Beck (2024): equipartition at 0.5 fs, '
               'T_rot < T_trans at 1-3 fs for rigid SPC/E:\n')
@@ -315,11 +221,12 @@ def report(rows, by_model, quick, equilibrate_ps, discard_ps, production_ps, sam
         md.append('- **%g fs** (%s): %s.' % (step, published, '; '.join(parts) or 'not run'))
     pairs = []
     for r in rows:
-        if r['method'] == METHODS[0] and r['failure'] is None:
+        if r['method'] == METHODS[0] and not r.get('failure'):
             other = [o for o in rows if o['model'] == r['model'] and o['step_fs'] == r['step_fs']
-                     and o['method'] == METHODS[1] and o['failure'] is None]
+                     and o['method'] == METHODS[1] and not o.get('failure')]
             if other:
-                (d1, e1), (d2, e2) = r['difference'], other[0]['difference']
+                d1, e1, d2, e2 = r['Trot_minus_Ttrans'], r['difference_se'], other[0]['Trot_minus_Ttrans'], \
+                    other[0]['difference_se']
                 pairs.append('%s %g fs %.1f' % (r['model'], r['step_fs'], abs(d1 - d2) / math.hypot(e1, e2)))
     if pairs:
         md.append('\nA check of the error bars: M-RATTLE and Verlet + SETTLE (on-step) integrate the same equations '
@@ -330,18 +237,3 @@ def report(rows, by_model, quick, equilibrate_ps, discard_ps, production_ps, sam
                   'scatter at this run length, and the verdicts above are to be read with that.' % ', '.join(pairs))
     return md
 
-
-def rows_from_csv(path):
-    """The rows of a CSV that run() or run_model() wrote (to report a run, or a run cut short)."""
-    rows = []
-    with open(path) as stream:
-        for r in csv.DictReader(stream):
-            row = dict(model=r['model'], method=r['method'], step_fs=float(r['step_fs']), failure=r['failure'] or None,
-                       steps=int(r['steps']), wall_s=float(r['wall_s']))
-            if row['failure'] is None:
-                row['Ttrans'] = (float(r['Ttrans']), float(r['Ttrans_se']))
-                row['Trot'] = (float(r['Trot']), float(r['Trot_se']))
-                row['difference'] = (float(r['Trot_minus_Ttrans']), float(r['difference_se']))
-                row['drift'] = float(r['drift_kJ_per_mol_ns_molecule'])
-            rows.append(row)
-    return rows

@@ -1,25 +1,15 @@
 """Validation of MRattleLangevinIntegrator on OpenMM's own inputs, against OpenMM's
 LangevinMiddleIntegrator with SETTLE on the same System (`./benchmarks/run.sh validate-langevin`)."""
-import csv
 import math
-import os
 import time
 
 import numpy as np
 import openmm
-from openmm import app, unit
+from openmm import unit
 
 import mrattle
-
-KB = 0.0083144626  # kJ/mol/K
-
-
-def block_mean(values, blocks=10):
-    """Mean and its standard error from block averages."""
-    values = np.asarray(values, dtype=float)
-    n = len(values) // blocks
-    means = values[:n * blocks].reshape(blocks, n).mean(axis=1)
-    return means.mean(), means.std(ddof=1) / math.sqrt(blocks)
+from .common import (KB, block_mean, context as start_context, masses as masses_of, removes_cm, rigid_split,
+                     temperatures, water, water_integrator, write_csv)
 
 
 def verdict(value, error, target, tolerance):
@@ -30,39 +20,6 @@ def verdict(value, error, target, tolerance):
     if deviation - 3 * error <= allowed:
         return 'not resolved (%.1f SE from the target)' % (deviation / error)
     return 'no (%.1f SE outside the tolerance)' % ((deviation - allowed) / error)
-
-
-def water(pdb_name='tip3p.pdb', forcefield_name='amber14/tip3p.xml', barostat_seed=None):
-    """A rigid water box of OpenMM's app/data with PME (0.9 nm), its waters at the model's exact geometry
-    (OpenMM's SETTLE through applyConstraints: the PDB's waters are slightly off it, and M-RATTLE keeps the
-    shapes it is given), and the bodies; with a MonteCarloBarostat (1 bar, 300 K, every 25 steps) if a
-    barostat_seed is given (0: OpenMM picks one)."""
-    pdb = app.PDBFile(os.path.join(os.path.dirname(app.__file__), 'data', pdb_name))
-    system = app.ForceField(forcefield_name).createSystem(pdb.topology, nonbondedMethod=app.PME,
-                                                          nonbondedCutoff=0.9 * unit.nanometers, rigidWater=True)
-    if barostat_seed is not None:
-        barostat = openmm.MonteCarloBarostat(1 * unit.bar, 300 * unit.kelvin, 25)
-        barostat.setRandomNumberSeed(barostat_seed)
-        system.addForce(barostat)
-    context = openmm.Context(system, openmm.VerletIntegrator(0.001), openmm.Platform.getPlatformByName('Reference'))
-    context.setPositions(pdb.positions)
-    context.applyConstraints(1e-12)
-    return system, context.getState(getPositions=True).getPositions(), mrattle.rigidBodies(pdb.topology, system)
-
-
-def temperatures(velocities, masses, bodies, dof_total, removes_cm):
-    """Kinetic, translational and rotational temperatures of rigid bodies (nonlinear)."""
-    kinetic = 0.5 * np.sum(masses[:, None] * velocities ** 2)
-    translational = 0.0
-    for body in bodies:
-        m = masses[body]
-        momentum = (m[:, None] * velocities[body]).sum(axis=0)
-        translational += 0.5 * momentum.dot(momentum) / m.sum()
-    n = len(bodies)
-    dof_trans = 3 * n - (3 if removes_cm else 0)
-    dof_rot = 3 * n
-    return (2 * kinetic / (dof_total * KB), 2 * translational / (dof_trans * KB),
-            2 * (kinetic - translational) / (dof_rot * KB))
 
 
 def oo_peak(frames, oxygens, box):
@@ -85,44 +42,32 @@ def oo_peak(frames, oxygens, box):
 
 def run_water(method, barostat, equilibrate, production, sample, seed, log):
     system, positions, bodies = water(barostat_seed=0 if barostat else None)  # bodies: every residue, the waters
-    if method == 'M-RATTLE Langevin':
-        integrator = mrattle.MRattleLangevinIntegrator(300 * unit.kelvin, 1 / unit.picosecond, 2 * unit.femtoseconds)
-    else:
-        integrator = openmm.LangevinMiddleIntegrator(300 * unit.kelvin, 1 / unit.picosecond, 2 * unit.femtoseconds)
-    integrator.setRandomNumberSeed(seed)
-    platform = openmm.Platform.getPlatformByName('CPU')
-    context = openmm.Context(system, integrator, platform)
-    context.setPositions(positions)
-    context.setVelocitiesToTemperature(300 * unit.kelvin, seed)
-    masses = np.array([system.getParticleMass(i).value_in_unit(unit.dalton) for i in range(system.getNumParticles())])
-    removes_cm = any(isinstance(f, openmm.CMMotionRemover) for f in system.getForces())
-    dof = 6 * len(bodies) - (3 if removes_cm else 0)
-    oxygens = [b[0] for b in bodies]
+    integrator = water_integrator(method, 2, seed)
+    context = start_context(system, integrator, positions, (300 * unit.kelvin, seed))
+    masses, cm = masses_of(system), removes_cm(system)
+    dof = 6 * len(bodies) - (3 if cm else 0)
     start = time.time()
     integrator.step(equilibrate)
     series = {'T': [], 'Ttrans': [], 'Trot': [], 'U': [], 'density': []}
     frames = []
-    total_mass = masses.sum() * 1.66053906660e-24  # g
     for k in range(production // sample):
         integrator.step(sample)
         state = context.getState(getVelocities=True, getEnergy=True, getPositions=(k % 10 == 0))
         v = state.getVelocities(asNumpy=True).value_in_unit(unit.nanometers / unit.picosecond)
-        t, tt, tr = temperatures(v, masses, bodies, dof, removes_cm)
-        series['T'].append(t)
-        series['Ttrans'].append(tt)
-        series['Trot'].append(tr)
+        kt, kr = rigid_split(v, masses, bodies)
+        series['T'].append(2 * (kt + kr) / (dof * KB))
+        series['Ttrans'].append(2 * kt / ((dof - 3 * len(bodies)) * KB))
+        series['Trot'].append(2 * kr / (3 * len(bodies) * KB))
         series['U'].append(state.getPotentialEnergy().value_in_unit(unit.kilojoule_per_mole) / len(bodies))
         a, b, c = state.getPeriodicBoxVectors(asNumpy=True).value_in_unit(unit.nanometers)
-        volume = a[0] * b[1] * c[2]
-        series['density'].append(total_mass / (volume * 1e-21))
+        series['density'].append(masses.sum() * 1.66053906660e-24 / (a[0] * b[1] * c[2] * 1e-21))  # g/mL
         if k % 10 == 0:
             frames.append(state.getPositions(asNumpy=True).value_in_unit(unit.nanometers))
-    box = a[0]
     result = {key: block_mean(values) for key, values in series.items()}
     if not barostat:
-        result['peak'] = oo_peak(frames[::2], oxygens, box)
-    elapsed = time.time() - start
-    log('%-22s %s %d+%d steps in %.0f s' % (method, 'NPT' if barostat else 'NVT', equilibrate, production, elapsed))
+        result['peak'] = oo_peak(frames[::2], [b[0] for b in bodies], a[0])
+    log('%-22s %s %d+%d steps in %.0f s' % (method, 'NPT' if barostat else 'NVT', equilibrate, production,
+                                            time.time() - start))
     return result
 
 
@@ -130,14 +75,8 @@ def benzene_temperatures(step_fs, steps, log, equilibration_ps=20.0):
     model = mrattle.models.benzeneLiquid()
     integrator = mrattle.MRattleLangevinIntegrator(298 * unit.kelvin, 1 / unit.picosecond, step_fs * unit.femtoseconds)
     integrator.setRandomNumberSeed(7)
-    context = openmm.Context(model.system, integrator, openmm.Platform.getPlatformByName('CPU'))
-    context.setPositions(model.positions)
-    context.setVelocitiesToTemperature(298 * unit.kelvin, 1)
-    bodies = integrator.getBodiesInEffect()
-    masses = np.array([model.system.getParticleMass(i).value_in_unit(unit.dalton)
-                       for i in range(model.system.getNumParticles())])
-    removes_cm = any(isinstance(f, openmm.CMMotionRemover) for f in model.system.getForces())
-    dof = integrator.getNumDegreesOfFreedom()
+    context = start_context(model.system, integrator, model.positions, (298 * unit.kelvin, 1))
+    bodies, masses, cm = integrator.getBodiesInEffect(), masses_of(model.system), removes_cm(model.system)
     try:
         integrator.step(int(1000 * equilibration_ps / step_fs))  # from the lattice
         trans, rot = [], []
@@ -145,7 +84,7 @@ def benzene_temperatures(step_fs, steps, log, equilibration_ps=20.0):
             integrator.step(max(1, int(20 / step_fs)))
             v = context.getState(getVelocities=True).getVelocities(asNumpy=True).value_in_unit(
                 unit.nanometers / unit.picosecond)
-            _, tt, tr = temperatures(v, masses, bodies, dof, removes_cm)
+            tt, tr = temperatures(v, masses, bodies, cm)
             if not (math.isfinite(tt) and math.isfinite(tr)):
                 return None
             trans.append(tt)
@@ -220,11 +159,7 @@ def run(quick, out, log):
     report.append('\nLargest step tried that stayed stable for the run: %s fs (the largest tried). Benzene\'s block '
                   'errors (10 ps of production) are about as large as the 2%% tolerance: longer runs are needed to '
                   'resolve it at the larger steps.' % largest_stable)
-    os.makedirs(os.path.dirname(os.path.abspath(out)), exist_ok=True)
-    with open(out + '.csv', 'w', newline='') as stream:
-        writer = csv.DictWriter(stream, fieldnames=['quantity', 'mrattle', 'mrattle_error', 'settle', 'settle_error'])
-        writer.writeheader()
-        writer.writerows(rows)
+    write_csv(out + '.csv', rows)
     return report
 
 

@@ -11,7 +11,7 @@ from openmm import unit
 
 import mrattle
 from . import common, sampling, stats
-from .sampling import KB
+from .common import KB
 METHODS = ("M-RATTLE", "splitting")
 
 
@@ -25,9 +25,7 @@ def equilibrated_start(temperature, seed, equilibrate_ps, log):
     thermostat.setRandomNumberSeed(seed)
     system.addForce(thermostat)
     integrator = mrattle.MRattleIntegrator(1 * unit.femtosecond)
-    context = openmm.Context(system, integrator, *common.platform("CPU", 1))
-    context.setPositions(model.positions)
-    context.setVelocitiesToTemperature(temperature * unit.kelvin, seed)
+    context = common.context(system, integrator, model.positions, (temperature * unit.kelvin, seed), "CPU", 1)
     integrator.step(200)
     integrator.setStepSize(4 * unit.femtosecond)
     integrator.step(int(equilibrate_ps / 0.004))
@@ -35,9 +33,7 @@ def equilibrated_start(temperature, seed, equilibrate_ps, log):
     x = np.array(state.getPositions(asNumpy=True).value_in_unit(unit.nanometer))
     v = np.array(state.getVelocities(asNumpy=True).value_in_unit(unit.nanometer / unit.picosecond))
     bodies = common.benzene_bodies(model.system.getNumParticles())
-    masses = np.array([model.system.getParticleMass(i).value_in_unit(unit.dalton)
-                       for i in range(model.system.getNumParticles())])
-    return model.system, x, without_net_motion(x, v, masses), bodies
+    return model.system, x, without_net_motion(x, v, common.masses(model.system)), bodies
 
 
 def without_net_motion(x, v, masses):
@@ -54,7 +50,7 @@ def without_net_motion(x, v, masses):
 
 def molecule_centres(positions, system, bodies):
     """Centre of mass of each body (nm)."""
-    masses = np.array([system.getParticleMass(i).value_in_unit(unit.dalton) for i in range(system.getNumParticles())])
+    masses = common.masses(system)
     return np.array([masses[b].dot(positions[b]) / masses[b].sum() for b in bodies])
 
 
@@ -161,9 +157,7 @@ def summary(rows):
 
 def plot(rows, path, block_ps=5.0):
     """E(t) - E(0) per start and step size: every sample (faint), block means (bold) and the fitted line."""
-    import matplotlib
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
+    plt = common.pyplot()
     panels = sorted({(r["step_fs"], r["seed"]) for r in rows}, key=lambda k: (-k[0], k[1]))
     fig, axes = plt.subplots(1, len(panels), figsize=(5.2 * len(panels), 4.2), squeeze=False)
     colours = {"M-RATTLE": "C0", "splitting": "C3"}
@@ -187,6 +181,4 @@ def plot(rows, path, block_ps=5.0):
         ax.set_ylabel("E(t) - E(0) (kJ/mol)")
         ax.legend(fontsize=7)
     fig.suptitle("27 rigid benzene molecules, NVE from equilibrated starts (faint: every sample)")
-    fig.tight_layout()
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
+    common.save_figure(fig, path)

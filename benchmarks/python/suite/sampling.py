@@ -1,12 +1,10 @@
 """Sampling: long NVE runs of the 27-benzene cluster with M-RATTLE and splitting, compared."""
 import numpy as np
-import openmm
 from openmm import unit
 
 import mrattle
 from . import common, stats
-
-KB = 0.00831446261815324  # kJ/mol/K
+from .common import KB
 LABELS = {"temperature": "temperature (6N DOF)", "radius": "farthest molecule from the centre of mass (nm)"}
 
 
@@ -29,12 +27,10 @@ def run(method, total_ps, step_fs, temperature, seed, log):
     """Sample kinetic temperature, per-molecule translational/rotational KE and intermolecular C-C distances."""
     model = mrattle.models.benzeneCluster(temperature=temperature * unit.kelvin, seed=seed)
     integrator = common.make_integrator(method, step_fs * common.FS)
-    plat, props = common.platform("CPU", 1)
-    context = openmm.Context(model.system, integrator, plat, props)
-    context.setPositions(model.positions)
-    context.setVelocities(model.velocities)
+    context = common.context(model.system, integrator, model.positions, model.velocities, "CPU", 1)
     n_mol = model.system.getNumParticles() // 12
-    masses = np.array([model.system.getParticleMass(i).value_in_unit(unit.dalton) for i in range(12)])
+    all_masses, bodies = common.masses(model.system), common.benzene_bodies(model.system.getNumParticles())
+    masses = all_masses[:12]
     dof = integrator.getNumDegreesOfFreedom()
     stride = max(1, int(round(0.1 / (step_fs * common.FS))))  # a frame every 100 fs
     frames = int(round(total_ps / (stride * step_fs * common.FS)))
@@ -46,10 +42,10 @@ def run(method, total_ps, step_fs, temperature, seed, log):
         ke = state.getKineticEnergy().value_in_unit(unit.kilojoule_per_mole)
         temps.append(2 * ke / (dof * KB))
         x = state.getPositions(asNumpy=True).value_in_unit(unit.nanometer).reshape(n_mol, 12, 3)
-        v = state.getVelocities(asNumpy=True).value_in_unit(unit.nanometer / unit.picosecond).reshape(n_mol, 12, 3)
-        ke_trans, ke_rot = kinetic_energy_per_molecule(v, masses)
-        trans.append(ke_trans)
-        rot.append(ke_rot)
+        ke_trans, ke_rot = common.rigid_split(  # per molecule, kJ/mol
+            state.getVelocities(asNumpy=True).value_in_unit(unit.nanometer / unit.picosecond), all_masses, bodies)
+        trans.append(ke_trans / n_mol)
+        rot.append(ke_rot / n_mol)
         expected, farthest = equipartition_target(x, masses)
         target.append(expected)
         radius.append(farthest)
@@ -65,33 +61,16 @@ def run(method, total_ps, step_fs, temperature, seed, log):
             "frame_ps": stride * step_fs * common.FS}
 
 
-def kinetic_energy_per_molecule(v, masses, relative_to_system=False):
-    """Mean translational and rotational kinetic energy per molecule (kJ/mol).
-
-    v: (molecules, sites, 3) nm/ps; masses: the sites' masses. relative_to_system: take
-    translation relative to the whole system's centre of mass (a conserved total momentum
-    carries kinetic energy that is no part of equipartition).
-    """
-    vcm = (masses[None, :, None] * v).sum(1) / masses.sum()
-    ke_total = 0.5 * (masses[None, :, None] * v ** 2).sum((1, 2))
-    ke_centres = 0.5 * masses.sum() * (vcm ** 2).sum(1)
-    ke_trans = 0.5 * masses.sum() * ((vcm - vcm.mean(0)) ** 2).sum(1) if relative_to_system else ke_centres
-    return float(ke_trans.mean()), float((ke_total - ke_centres).mean())
-
-
-def scalar_rows(results, labels):
-    """Per quantity: each method's mean, the spread of run means, and a KS test on the
-    decorrelated pooled samples. results: {method: {name: [one array per run]}}."""
-    rows = []
-    for name, label in labels.items():
-        a = _decorrelated(results["M-RATTLE"][name])
-        b = _decorrelated(results["splitting"][name])
-        d, p = stats.ks_two_sample(a, b)
-        rows.append({"quantity": label, "M-RATTLE mean": float(np.concatenate(results["M-RATTLE"][name]).mean()),
-                     "splitting mean": float(np.concatenate(results["splitting"][name]).mean()),
-                     "spread of run means": _run_spread(results, name),
-                     "KS D": d, "KS p": p, "independent samples": (len(a), len(b))})
-    return rows
+def row(label, per_run):
+    """One quantity: each method's mean, the spread of run means and a KS test on the decorrelated pooled
+    samples. per_run: {method: [one array per run]}."""
+    a, b = _decorrelated(per_run["M-RATTLE"]), _decorrelated(per_run["splitting"])
+    d, p = stats.ks_two_sample(a, b)
+    means = [r.mean() for runs in per_run.values() for r in runs]
+    return {"quantity": label, "M-RATTLE mean": float(np.concatenate(per_run["M-RATTLE"]).mean()),
+            "splitting mean": float(np.concatenate(per_run["splitting"]).mean()),
+            "spread of run means": float(np.std(means, ddof=1)) if len(means) > 1 else float("nan"),
+            "KS D": d, "KS p": p, "independent samples": (len(a), len(b))}
 
 
 def _inertia(points, masses):
@@ -125,27 +104,14 @@ def _decorrelated(runs):
     return np.concatenate([stats.decorrelate(r) for r in runs])
 
 
-def _run_spread(results, name):
-    """Standard deviation of the per-run means, over every run of both methods: how much one
-    run's mean varies, against which the difference between the methods' means is judged."""
-    means = [r.mean() for method in results.values() for r in method[name]]
-    return float(np.std(means, ddof=1)) if len(means) > 1 else float("nan")
-
-
 def compare(results):
     """Means, KS tests on decorrelated pooled samples, and equipartition per method."""
-    rows = scalar_rows(results, {name: LABELS.get(name, name)
-                                 for name in ("temperature", "translational", "rotational", "radius")})
-    # C-C distances: the per-frame fraction of pairs within the first peak (< 0.6 nm), a
-    # scalar series that can be decorrelated; the pooled histograms are in the plot.
-    shell = {m: [(c < 0.6).mean(1) for c in r["cc"]] for m, r in results.items()}
-    a, b = _decorrelated(shell["M-RATTLE"]), _decorrelated(shell["splitting"])
-    d, p = stats.ks_two_sample(a, b)
-    rows.append({"quantity": "C-C pairs < 0.6 nm (fraction)",
-                 "M-RATTLE mean": float(np.concatenate(shell["M-RATTLE"]).mean()),
-                 "splitting mean": float(np.concatenate(shell["splitting"]).mean()),
-                 "spread of run means": _run_spread({m: {"shell": v} for m, v in shell.items()}, "shell"),
-                 "KS D": d, "KS p": p, "independent samples": (len(a), len(b))})
+    rows = [row(LABELS.get(name, name), {m: r[name] for m, r in results.items()})
+            for name in ("temperature", "translational", "rotational", "radius")]
+    # C-C distances: the per-frame fraction of pairs within the first peak (< 0.6 nm), a scalar series that
+    # can be decorrelated; the pooled histograms are in the plot.
+    rows.append(row("C-C pairs < 0.6 nm (fraction)",
+                    {m: [(c < 0.6).mean(1) for c in r["cc"]] for m, r in results.items()}))
     # Equipartition: rotational over translational kinetic energy per molecule. Conserved P and L
     # take more degrees of freedom from translation than from rotation, so the target is the
     # per-frame expectation from equipartition_target(), not 1.
@@ -164,9 +130,7 @@ def compare(results):
 
 
 def plot(results, path):
-    import matplotlib
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
+    plt = common.pyplot()
     fig, axes = plt.subplots(1, 3, figsize=(15, 4.2))
     for method, r in results.items():
         axes[0].hist(np.concatenate(r["temperature"]), bins=30, density=True, histtype="step", lw=1.5, label=method)
@@ -182,6 +146,4 @@ def plot(results, path):
     for ax in axes:
         ax.legend(fontsize=8)
     fig.suptitle("27 rigid benzene molecules, NVE: M-RATTLE vs splitting")
-    fig.tight_layout()
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
+    common.save_figure(fig, path)

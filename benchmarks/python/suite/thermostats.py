@@ -1,63 +1,26 @@
-"""Validation of MRattleNoseHooverIntegrator and MRattleBussiIntegrator (issue 33) on rigid
-TIP3P water (openmm/app/data/tip3p.pdb, amber14/tip3p.xml, PME 0.9 nm, 895 waters, CPU platform).
-
-From one start (LangevinMiddle + SETTLE at 300 K), each method runs at 300 K:
-1. production at 2 fs with M-RATTLE NVE, the Nose-Hoover chain (10/ps), CSVR (10/ps) and
-   LangevinMiddleIntegrator + SETTLE (1/ps): the kinetic energy's mean and variance against the
-   canonical values for N = 6 * 895 - 3 degrees of freedom (mean N kT/2, variance N (kT)^2/2),
-   the potential energy per molecule, the translational and rotational temperatures, and the
-   self-diffusion coefficient (oxygen mean-squared displacement);
-2. short runs at 0.5, 1, 3, 4 and 5 fs (2 fs from 1.) of the three M-RATTLE methods: the
-   conserved quantity's drift (kinetic + potential + the heat bath's energy; NVE's total
-   energy) and the translational and rotational temperatures (on-step velocities).
-Means carry standard errors from 10 block averages; a variance's error comes from the block
-variances. `./benchmarks/run.sh validate-thermostats` (validate(), below).
-
-Follow-up studies (run with --study, reported in the same section when their CSVs
-lie beside the main one): the potential energy per water at smaller steps beside LangevinMiddle + SETTLE
-(run_step_sizes: is the 2-fs difference a step-size error?), and the density under a MonteCarloBarostat
-(run_density). The translational and rotational temperatures against the step are in the equipartition
-table (suite/equipartition.py runs the two thermostats for TIP3P).
-"""
-import csv
+"""`./benchmarks/run.sh validate-thermostats`: MRattleNoseHooverIntegrator and MRattleBussiIntegrator on rigid
+TIP3P water from one start, beside NVE and LangevinMiddle + SETTLE: canonical kinetic energy, potential energy,
+diffusion at 2 fs and the conserved quantity's drift at 0.5-5 fs (the method: report()). Follow-up studies
+(--study): the potential energy at smaller steps (is the 2-fs difference a step-size error?) and the density
+under a barostat, reported in the same section when their CSVs lie beside the main one."""
 import os
 import math
 import time
 
 import numpy as np
-import openmm
 from openmm import unit
 
 import mrattle
 
-from . import common, equipartition, langevin
+from . import equipartition
+from .common import (KB, TEMPERATURE, block_mean, context as start_context, equilibrate, masses as masses_of, read_csv,
+                     temperatures, water, water_integrator, write_csv)
 from .stats import drift_with_error
 
-TEMPERATURE = 300.0
-FREQUENCY = 10.0  # 1/ps, both thermostats
 METHODS = ('M-RATTLE NVE', 'M-RATTLE Nose-Hoover chain', 'M-RATTLE CSVR', 'LangevinMiddle + SETTLE')
 BLOCKS = 10
 DALTON_GRAMS = 1.66053906660e-24
 SAMPLE_FS = 10.0  # between samples of every run
-
-
-def make_integrator(method, step_fs):
-    step = step_fs * unit.femtoseconds
-    if method == 'M-RATTLE NVE':
-        return mrattle.MRattleIntegrator(step)
-    if method == 'M-RATTLE Nose-Hoover chain':
-        return mrattle.MRattleNoseHooverIntegrator(TEMPERATURE, FREQUENCY, step)
-    if method == 'M-RATTLE CSVR':
-        integrator = mrattle.MRattleBussiIntegrator(TEMPERATURE, FREQUENCY, step)
-        integrator.setRandomNumberSeed(5)
-        return integrator
-    if method == 'LangevinMiddle + SETTLE':
-        integrator = openmm.LangevinMiddleIntegrator(TEMPERATURE, 1.0, step)
-        integrator.setRandomNumberSeed(5)
-        return integrator
-    if method == M_RATTLE_LANGEVIN:
-        return equipartition.make_integrator(method, step_fs)
-    raise ValueError(method)
 
 
 def block_variance(values, blocks=BLOCKS):
@@ -65,7 +28,7 @@ def block_variance(values, blocks=BLOCKS):
     from the whole series' mean, block-averaged (so the blocks' own means moving is counted)."""
     values = np.asarray(values, float)
     squares = (values - values.mean()) ** 2
-    return langevin.block_mean(squares, blocks)
+    return block_mean(squares, blocks)
 
 
 def diffusion(times, oxygens, segments=4):
@@ -87,13 +50,11 @@ def diffusion(times, oxygens, segments=4):
 def run_series(method, step_fs, ps, start, system, bodies, threads, sample_fs=SAMPLE_FS, keep_oxygens=False):
     """One run's series (every sample_fs): time, kinetic, potential, conserved energy, T_trans, T_rot, density;
     oxygen positions."""
-    integrator = make_integrator(method, step_fs)
-    context = openmm.Context(system, integrator, *common.platform('CPU', threads))
-    context.setPositions(start[0])
-    context.setVelocities(start[1])
+    integrator = water_integrator(method, step_fs)
+    context = start_context(system, integrator, start[0], start[1], 'CPU', threads)
     rigid = isinstance(integrator, mrattle.RigidBodyIntegrator)
     bath = getattr(integrator, 'computeHeatBathEnergy', None)
-    masses = np.array([system.getParticleMass(i).value_in_unit(unit.dalton) for i in range(system.getNumParticles())])
+    masses = masses_of(system)
     oxygen = [body[0] for body in bodies]
     stride = max(1, int(round(sample_fs / step_fs)))
     series = {key: [] for key in ('time', 'kinetic', 'potential', 'conserved', 'Ttrans', 'Trot', 'density')}
@@ -116,7 +77,7 @@ def run_series(method, step_fs, ps, start, system, bodies, threads, sample_fs=SA
             series['Trot'].append(integrator.computeRotationalTemperature().value_in_unit(unit.kelvin))
         else:  # its half-step velocities, as LangevinMiddle reports them
             v = state.getVelocities(asNumpy=True).value_in_unit(unit.nanometer / unit.picosecond)
-            _, ttrans, trot = langevin.temperatures(v, masses, bodies, 6 * len(bodies) - 3, True)
+            ttrans, trot = temperatures(v, masses, bodies, True)
             series['Ttrans'].append(ttrans)
             series['Trot'].append(trot)
         if keep_oxygens:
@@ -132,61 +93,47 @@ CSV_COLUMNS = ['method', 'step_fs', 'ps', 'kinetic_mean', 'kinetic_mean_se', 'ki
 STEPS_FS = (2, 0.5, 1, 3, 4, 5)
 
 
-def water(barostat=False):
-    """tip3p.pdb's rigid System (with a seeded MonteCarloBarostat if asked), exact positions and bodies."""
-    return langevin.water(barostat_seed=7 if barostat else None)
-
-
-def write_rows(path, rows, columns=None):
-    with open(path, 'w', newline='') as stream:
-        writer = csv.DictWriter(stream, columns or CSV_COLUMNS)
-        writer.writeheader()
-        writer.writerows(rows)
-
-
-def run(quick, out, log, threads=1, methods=METHODS, steps=None):
+def run(quick, out, log, threads=1):
     """Every run; out + '.csv' gets a row per run as it ends; returns the report as markdown lines."""
     production_ps, short_ps, equilibrate_ps = (0.2, 0.1, 0.05) if quick else (20.0, 2.0, 2.0)
     began = time.time()
     system, positions, bodies = water()
     log('thermostats: equilibrating %g ps (LangevinMiddle + SETTLE, 2 fs)' % equilibrate_ps)
-    start = equipartition.equilibrate(system, positions, equilibrate_ps, threads)
+    start = equilibrate(system, positions, equilibrate_ps, threads)
     rows = []
-    for method in methods:
-        for step_fs in steps or STEPS_FS:
+    for method in METHODS:
+        for step_fs in STEPS_FS:
             if method == 'LangevinMiddle + SETTLE' and step_fs != 2:
                 continue
             row = run_one(method, step_fs, production_ps if step_fs == 2 else short_ps, start, system, bodies, threads)
             log('thermostats: %s' % row)
             rows.append(row)
-            write_rows(out + '.csv', rows)
+            write_csv(out + '.csv', rows, CSV_COLUMNS)
     return report(rows, len(bodies), quick, production_ps, short_ps, equilibrate_ps, threads,
                   (time.time() - began) / 60)
 
 
 STEP_SIZE_METHODS = METHODS[1:]  # the sampling ones
 # MRattleLangevinIntegrator (1/ps): LangevinMiddle's splitting with M-RATTLE, to tell the splitting's share of a
-# difference from M-RATTLE's (only when asked for).
+# difference from M-RATTLE's.
 M_RATTLE_LANGEVIN = 'M-RATTLE Langevin'
-STEP_SIZE_FS = (1, 0.5)  # 2 fs: the main run's production rows
+# (method, step in fs) of the study; the others' 2 fs rows are the main run's production rows. LangevinMiddle
+# runs from 1 fs only: its configurational sampling is the reference.
+STEP_SIZE_RUNS = [(m, h) for h in (1.5, 1, 0.5) for m in STEP_SIZE_METHODS if h >= 1 or m != METHODS[3]] + \
+    [(M_RATTLE_LANGEVIN, 2), (M_RATTLE_LANGEVIN, 1)]
 
 
-def run_step_sizes(quick, out, log, threads=1, steps=STEP_SIZE_FS, ps=20.0, methods=STEP_SIZE_METHODS):
-    """The potential energy's step-size dependence (NVT): each thermostat and LangevinMiddle + SETTLE at
-    `steps` for `ps` each, from the main run's start, with the 2-fs runs' figures (out + '.csv'). LangevinMiddle
-    is run at 1 fs and up only (its configurational sampling is the reference)."""
-    assert set(methods) <= set(STEP_SIZE_METHODS + (M_RATTLE_LANGEVIN,)), methods
+def run_step_sizes(quick, out, log, threads=1, ps=20.0):
+    """The potential energy's step-size dependence (NVT): STEP_SIZE_RUNS for `ps` each from the main run's
+    start (rows to out + '.csv')."""
     ps, equilibrate_ps = (0.2, 0.05) if quick else (ps, 2.0)
     system, positions, bodies = water()
-    start = equipartition.equilibrate(system, positions, equilibrate_ps, threads)
+    start = equilibrate(system, positions, equilibrate_ps, threads)
     rows = []
-    for step_fs in steps:
-        for method in methods:
-            if method == 'LangevinMiddle + SETTLE' and step_fs < 1:
-                continue
-            rows.append(run_one(method, step_fs, ps, start, system, bodies, threads, production=True))
-            log('thermostats step sizes: %s' % rows[-1])
-            write_rows(out + '.csv', rows)
+    for method, step_fs in STEP_SIZE_RUNS:
+        rows.append(run_one(method, step_fs, ps, start, system, bodies, threads, production=True))
+        log('thermostats step sizes: %s' % rows[-1])
+        write_csv(out + '.csv', rows, CSV_COLUMNS)
     return rows
 
 
@@ -202,9 +149,9 @@ def run_density(quick, out, log, threads=1, ps=40.0, discard_ps=4.0, equilibrate
     Rows to out + '.csv'."""
     if quick:
         ps, discard_ps, equilibrate_ps = 0.2, 0.02, 0.05
-    system, positions, bodies = water(barostat=True)
+    system, positions, bodies = water(barostat_seed=7)
     log('thermostats NPT: equilibrating %g ps (LangevinMiddle + SETTLE, 2 fs, barostat)' % equilibrate_ps)
-    start = equipartition.equilibrate(system, positions, equilibrate_ps, threads)
+    start = equilibrate(system, positions, equilibrate_ps, threads)
     dof = 6 * len(bodies) - 3
     rows = []
     for method in STEP_SIZE_METHODS:
@@ -215,15 +162,15 @@ def run_density(quick, out, log, threads=1, ps=40.0, discard_ps=4.0, equilibrate
             row['failure'] = str(error).splitlines()[0]
         else:
             kept = len(series['time']) - int(round(ps * 1000 / SAMPLE_FS))
-            row['density'], row['density_se'] = langevin.block_mean(series['density'][kept:], BLOCKS)
-            u, u_se = langevin.block_mean(series['potential'][kept:], BLOCKS)
+            row['density'], row['density_se'] = block_mean(series['density'][kept:], BLOCKS)
+            u, u_se = block_mean(series['potential'][kept:], BLOCKS)
             row['potential_per_molecule'], row['potential_per_molecule_se'] = u / len(bodies), u_se / len(bodies)
-            k, k_se = langevin.block_mean(series['kinetic'][kept:], BLOCKS)
-            row['T'], row['T_se'] = 2 * k / (dof * langevin.KB), 2 * k_se / (dof * langevin.KB)
+            k, k_se = block_mean(series['kinetic'][kept:], BLOCKS)
+            row['T'], row['T_se'] = 2 * k / (dof * KB), 2 * k_se / (dof * KB)
             row['wall_s'] = round(wall)
         rows.append(row)
         log('thermostats NPT: %s' % row)
-        write_rows(out + '.csv', rows, DENSITY_COLUMNS)
+        write_csv(out + '.csv', rows, DENSITY_COLUMNS)
     return rows
 
 
@@ -240,31 +187,22 @@ def run_one(method, step_fs, ps, start, system, bodies, threads, production=None
         drift, drift_se = drift_with_error(series['time'], series['conserved'])
         row['drift_kJ_per_mol_ns_per_molecule'], row['drift_se'] = drift / len(bodies), drift_se / len(bodies)
     for key in ('Ttrans', 'Trot'):
-        row[key], row[key + '_se'] = langevin.block_mean(series[key], BLOCKS)
+        row[key], row[key + '_se'] = block_mean(series[key], BLOCKS)
     if production:
-        row['kinetic_mean'], row['kinetic_mean_se'] = langevin.block_mean(series['kinetic'], BLOCKS)
+        row['kinetic_mean'], row['kinetic_mean_se'] = block_mean(series['kinetic'], BLOCKS)
         row['kinetic_variance'], row['kinetic_variance_se'] = block_variance(series['kinetic'])
-        mean_potential, se_potential = langevin.block_mean(series['potential'], BLOCKS)
+        mean_potential, se_potential = block_mean(series['potential'], BLOCKS)
         row['potential_per_molecule'], row['potential_per_molecule_se'] = (mean_potential / len(bodies),
                                                                            se_potential / len(bodies))
         row['D_1e-5_cm2_per_s'], row['D_se'] = diffusion(series['time'], oxygens)
     return row
 
 
-def rows_from_csv(path):
-    """The rows a run wrote (numbers as floats, empty cells dropped)."""
-    rows = []
-    with open(path) as stream:
-        for r in csv.DictReader(stream):
-            rows.append({k: (v if k in ('method', 'failure') else float(v)) for k, v in r.items() if v != ''})
-    return rows
-
-
 def report(rows, molecules, quick, production_ps, short_ps, equilibrate_ps, threads, minutes, step_rows=None,
            density_rows=None):
     """The section: the main run's rows, and the follow-up studies' (step sizes, density) where given."""
     dof = 6 * molecules - 3
-    kT = langevin.KB * TEMPERATURE
+    kT = KB * TEMPERATURE
     mean_k, variance_k = 0.5 * dof * kT, 0.5 * dof * kT * kT
 
     def pm(row, key, se, digits=1):
@@ -348,8 +286,8 @@ def report_step_sizes(rows, dof, kT):
             continue
         d, e = r['potential_per_molecule'] - reference[0], math.hypot(r['potential_per_molecule_se'], reference[1])
         md.append('| %s | %g | %g | %.1f +- %.1f | %.3f +- %.3f | %+.3f +- %.3f (%+.1f) |' % (
-            r['method'], r['step_fs'], r['ps'], 2 * r['kinetic_mean'] / (dof * langevin.KB),
-            2 * r['kinetic_mean_se'] / (dof * langevin.KB), r['potential_per_molecule'], r['potential_per_molecule_se'],
+            r['method'], r['step_fs'], r['ps'], 2 * r['kinetic_mean'] / (dof * KB),
+            2 * r['kinetic_mean_se'] / (dof * KB), r['potential_per_molecule'], r['potential_per_molecule_se'],
             d, e, d / e))
     gaps = []
     for step in sorted({r['step_fs'] for r in rows}, reverse=True):
@@ -424,26 +362,22 @@ def validate(args, quick, out, log):
     """`./benchmarks/run.sh validate-thermostats`: the main runs (or, --report-from, their CSV reported), or one
     follow-up study (--study: step sizes and density write their CSVs, out + '_<study>.csv', which the main report
     reads beside its own; equipartition its rows of that table). Returns the section's markdown lines."""
-    steps = [float(x) for x in args.steps.split(',')] if args.steps else None
-    extra = {'ps': args.ps} if args.ps else {}
     if args.study == 'step-sizes':
-        if args.methods:
-            extra['methods'] = tuple(args.methods.split(','))
-        run_step_sizes(quick, out + '_step_sizes', log, args.threads, steps or STEP_SIZE_FS, **extra)
+        run_step_sizes(quick, out + '_step_sizes', log, args.threads)
         return []
     if args.study == 'density':
-        run_density(quick, out + '_density', log, args.threads, **extra)
+        run_density(quick, out + '_density', log, args.threads)
         return []
     if args.study == 'equipartition':
         if args.report_from:
-            return equipartition.report(equipartition.rows_from_csv(args.report_from),
+            return equipartition.report(read_csv(args.report_from),
                                         {'TIP3P': equipartition.MOLECULES, 'SPC/E': equipartition.MOLECULES}, False,
                                         *equipartition.LENGTHS, args.threads)
         return equipartition.run(quick, os.path.join(os.path.dirname(out), 'equipartition'), log, args.threads,
                                  methods=equipartition.THERMOSTATS)
     if args.report_from:
         stem = args.report_from[:-len('.csv')]
-        beside = [rows_from_csv(stem + suffix) if os.path.exists(stem + suffix) else None
+        beside = [read_csv(stem + suffix) if os.path.exists(stem + suffix) else None
                   for suffix in ('_step_sizes.csv', '_density.csv')]
-        return report(rows_from_csv(args.report_from), 895, False, 20.0, 2.0, 2.0, 1, 0.0, *beside)
-    return run(quick, out, log, args.threads, steps=steps)
+        return report(read_csv(args.report_from), 895, False, 20.0, 2.0, 2.0, 1, 0.0, *beside)
+    return run(quick, out, log, args.threads)
