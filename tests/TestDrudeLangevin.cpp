@@ -6,6 +6,7 @@
  * cores; the settings round-trip through XML.
  */
 #include "MRattleDrudeLangevinIntegrator.h"
+#include "MRattleLangevinIntegrator.h"
 #include "TestSupport.h"
 #include "openmm/reference/SimTKOpenMMRealType.h"
 #include <gtest/gtest.h>
@@ -179,6 +180,57 @@ TEST(DrudeLangevin, BodyAndDrudeTemperaturesReachTheirTargets) {
     // Errors small enough for the check to mean something (a few per cent).
     EXPECT_LT(bodyMean.second, 0.03 * temperature);
     EXPECT_LT(drudeMean.second, 0.03 * drudeTemperature);
+}
+
+TEST(DrudeLangevin, DrudeNoiseAloneKeepsMomentumAndAngularMomentum) {
+    // Without friction on the bodies only C is thermostatted: its noise and friction move
+    // each augmented body's Drude particles with zero momentum and zero angular momentum,
+    // and the forces (vacuum, no cutoff) and M-RATTLE keep both, so the totals stay as they
+    // began. (A free pair's C is its relative motion, which turns the pair: no ions here.)
+    DrudeSystem d = drudeWaters(4, 0, 0.32);
+    MRattleDrudeLangevinIntegrator integrator(300, 0.0, 50, 20.0, 0.001);
+    integrator.setRandomNumberSeed(9);
+    std::unique_ptr<Context> context = referenceContext(d, integrator);
+    context->setVelocitiesToTemperature(300, 8);
+    const vector<double> m = masses(d.system);
+    const State start = context->getState(State::Positions | State::Velocities);
+    integrator.step(1000);
+    const State end = context->getState(State::Positions | State::Velocities);
+    const Vec3 p0 = totalMomentum(m, start.getVelocities()), p1 = totalMomentum(m, end.getVelocities());
+    // Leapfrog keeps sum m x_n x v_{n-1/2} (each drift moves x along v; the kicks are central,
+    // the noise has none about the positions it is drawn at, those the last half drift leaves
+    // it parallel to): the State's positions and velocities as they are.
+    const Vec3 l0 = angularMomentum(m, start.getPositions(), start.getVelocities());
+    const Vec3 l1 = angularMomentum(m, end.getPositions(), end.getVelocities());
+    for (int k = 0; k < 3; k++) {
+        EXPECT_NEAR(p0[k], p1[k], 1e-9) << "momentum, axis " << k;
+        EXPECT_NEAR(l0[k], l1[k], 1e-6) << "angular momentum, axis " << k;
+    }
+    // The Drude particles did get the noise: they are near 50 K, not at the start's 300 K.
+    EXPECT_LT(integrator.computeDrudeTemperature(), 150);
+}
+
+TEST(DrudeLangevin, WithoutFrictionItIsMRattleLangevin) {
+    // Both frictions 0: no noise, one drift, no wall: MRattleLangevinIntegrator's step at zero friction, bit for bit.
+    DrudeSystem d = drudeWaters(3, 1, 0.32);
+    vector<vector<Vec3> > positions;
+    for (int kind = 0; kind < 2; kind++) {
+        std::unique_ptr<RigidBodyIntegrator> integrator;
+        if (kind == 0)
+            integrator.reset(new MRattleLangevinIntegrator(300, 0.0, 0.001));
+        else
+            integrator.reset(new MRattleDrudeLangevinIntegrator(300, 0.0, 1.0, 0.0, 0.001));
+        for (const vector<int>& body : d.bodies)
+            integrator->addRigidBody(body);
+        Context context(d.system, *integrator, platform("Reference"));
+        context.setPositions(d.positions);
+        context.setVelocitiesToTemperature(300, 4);
+        integrator->step(200);
+        positions.push_back(context.getState(State::Positions).getPositions());
+    }
+    for (size_t i = 0; i < positions[0].size(); i++)
+        for (int k = 0; k < 3; k++)
+            EXPECT_EQ(positions[0][i][k], positions[1][i][k]) << "particle " << i;
 }
 
 TEST(DrudeLangevin, ADrudeParticleInABodyIsRefusedNamingIt) {
