@@ -3,7 +3,8 @@
  * free Drude pair moves; the bodies' and the Drude particles' temperatures are their two
  * targets within their statistical errors; a Drude particle in a body, bad settings and the
  * device platforms are refused with a message; the hard wall holds Drude particles near their
- * cores; the settings round-trip through XML.
+ * cores and a step that crosses twice it is refused; checkpoints continue bit for bit; the
+ * Drude noise alone keeps momentum; the settings round-trip through XML.
  */
 #include "MRattleDrudeLangevinIntegrator.h"
 #include "MRattleLangevinIntegrator.h"
@@ -12,6 +13,7 @@
 #include <gtest/gtest.h>
 #include <cmath>
 #include <limits>
+#include <sstream>
 #ifdef MRATTLE_HAVE_DRUDE
 #include "openmm/DrudeForce.h"
 #endif
@@ -233,6 +235,26 @@ TEST(DrudeLangevin, WithoutFrictionItIsMRattleLangevin) {
             EXPECT_EQ(positions[0][i][k], positions[1][i][k]) << "particle " << i;
 }
 
+TEST(DrudeLangevin, ACheckpointContinuesBitForBit) {
+    // The random stream is in the checkpoint: 50 steps after loading it are the 50 steps run on.
+    DrudeSystem d = drudeWaters(3, 1, 0.32);
+    MRattleDrudeLangevinIntegrator integrator(300, 5.0, 50, 20.0, 0.001);
+    integrator.setRandomNumberSeed(21);
+    std::unique_ptr<Context> context = referenceContext(d, integrator);
+    context->setVelocitiesToTemperature(300, 6);
+    integrator.step(20);
+    std::stringstream checkpoint;
+    context->createCheckpoint(checkpoint);
+    integrator.step(50);
+    const vector<Vec3> straight = context->getState(State::Positions).getPositions();
+    context->loadCheckpoint(checkpoint);
+    integrator.step(50);
+    const vector<Vec3> again = context->getState(State::Positions).getPositions();
+    for (size_t i = 0; i < straight.size(); i++)
+        for (int k = 0; k < 3; k++)
+            EXPECT_EQ(straight[i][k], again[i][k]) << "particle " << i;
+}
+
 TEST(DrudeLangevin, ADrudeParticleInABodyIsRefusedNamingIt) {
     DrudeSystem d = drudeWaters(2, 0, 0.4);
     MRattleDrudeLangevinIntegrator integrator(300, 1.0, 1.0, 20.0, 0.001);
@@ -281,6 +303,32 @@ TEST(DrudeLangevin, HardWallKeepsDrudeParticlesNearTheirCores) {
     }
     EXPECT_LE(farthest, wall * (1 + 1e-9));
     EXPECT_GT(farthest, 0.9 * wall);
+}
+
+TEST(DrudeLangevin, ADrudeParticleBeyondTwiceTheWallFailsTheStep) {
+    // Hot Drude particles (3000 K) with a 1 fs step cross twice a 0.004 nm wall in one step:
+    // that step is refused, naming the particle, with the state as before it.
+    DrudeSystem d = drudeWaters(2, 1, 0.4);
+    MRattleDrudeLangevinIntegrator integrator(300, 5.0, 3000, 20.0, 0.001);
+    integrator.setMaxDrudeDistance(0.004);
+    integrator.setRandomNumberSeed(5);
+    std::unique_ptr<Context> context = referenceContext(d, integrator);
+    string message;
+    State before = context->getState(State::Positions);
+    for (int k = 0; k < 100 && message.empty(); k++) {
+        before = context->getState(State::Positions);
+        try {
+            integrator.step(1);
+        } catch (const OpenMMException& e) {
+            message = e.what();
+        }
+    }
+    EXPECT_NE(string::npos, message.find("beyond twice the hard wall")) << message;
+    EXPECT_NE(string::npos, message.find("MRattleDrudeLangevinIntegrator")) << message;
+    const State after = context->getState(State::Positions);
+    EXPECT_EQ(before.getStepCount(), after.getStepCount());
+    for (size_t i = 0; i < d.positions.size(); i++)
+        EXPECT_EQ(before.getPositions()[i][0], after.getPositions()[i][0]) << "particle " << i;
 }
 
 #endif // MRATTLE_HAVE_DRUDE
