@@ -2,6 +2,7 @@
 #include "MRattleBuildInfo.h"
 #include "MRattlePlatforms.h"
 #include "MRattleBussiIntegrator.h"
+#include "MRattleDrudeLangevinIntegrator.h"
 #include "MRattleLangevinIntegrator.h"
 #include "MRattleNoseHooverIntegrator.h"
 #include "RigidSplittingIntegrator.h"
@@ -178,6 +179,20 @@ const std::vector<IntegratorTraits>& integrators() {
          [](RigidBodyIntegrator& integrator) {
              return dynamic_cast<MRattleBussiIntegrator&>(integrator).computeHeatBathEnergy();
          }},
+        // Reference and CPU only (the device platforms refuse it); the generic suites' Systems
+        // have no DrudeForce, where it is MRattleLangevin with its own draws.
+        {"MRattleDrudeLangevin", false, true, false, true, false,
+         maker<MRattleDrudeLangevinIntegrator>([](auto make, double h) {
+             auto* drude = make(300.0, 1.0, 1.0, 20.0, h);
+             drude->setRandomNumberSeed(2024);
+             return drude;
+         }),
+         [](RigidBodyIntegrator& integrator) {
+             auto& drude = dynamic_cast<MRattleDrudeLangevinIntegrator&>(integrator);
+             drude.setFriction(0);
+             drude.setDrudeFriction(0);
+         },
+         nullptr, true},
     };
     return list;
 }

@@ -285,6 +285,41 @@ MRATTLE_BATH_CONSTRUCTOR(MRattleBussiIntegrator, collisionFrequency, (double tem
 %}
 MRATTLE_INTEGRATOR(MRattleBussiIntegrator)
 
+/* OpenMM's DrudeLangevinIntegrator's units: two baths (K, 1/ps), the hard wall in nm. */
+MRATTLE_BATH_UNITS(MRattleDrudeLangevinIntegrator, setFriction, getFriction, coeff)
+%feature("pythonprepend") MRattlePlugin::MRattleDrudeLangevinIntegrator::MRattleDrudeLangevinIntegrator(double temperature, double frictionCoeff, double drudeTemperature, double drudeFrictionCoeff, double stepSize) %{
+    temperature = _inUnit(temperature, unit.kelvin)
+    frictionCoeff = _inUnit(frictionCoeff, unit.picosecond**-1)
+    drudeTemperature = _inUnit(drudeTemperature, unit.kelvin)
+    drudeFrictionCoeff = _inUnit(drudeFrictionCoeff, unit.picosecond**-1)
+    stepSize = _inUnit(stepSize, unit.picosecond)
+%}
+%feature("pythonprepend") MRattlePlugin::MRattleDrudeLangevinIntegrator::setDrudeTemperature %{
+    temperature = _inUnit(temperature, unit.kelvin)
+%}
+%feature("pythonprepend") MRattlePlugin::MRattleDrudeLangevinIntegrator::setDrudeFriction %{
+    coeff = _inUnit(coeff, unit.picosecond**-1)
+%}
+%feature("pythonprepend") MRattlePlugin::MRattleDrudeLangevinIntegrator::setMaxDrudeDistance %{
+    distance = _inUnit(distance, unit.nanometer)
+%}
+%feature("pythonappend") MRattlePlugin::MRattleDrudeLangevinIntegrator::getDrudeTemperature %{
+    val = val*unit.kelvin
+%}
+%feature("pythonappend") MRattlePlugin::MRattleDrudeLangevinIntegrator::getDrudeFriction %{
+    val = val/unit.picosecond
+%}
+%feature("pythonappend") MRattlePlugin::MRattleDrudeLangevinIntegrator::getMaxDrudeDistance %{
+    val = val*unit.nanometer
+%}
+%feature("pythonappend") MRattlePlugin::MRattleDrudeLangevinIntegrator::computeDrudeTemperature %{
+    val = val*unit.kelvin
+%}
+%feature("pythonappend") MRattlePlugin::MRattleDrudeLangevinIntegrator::computeBodyTemperature %{
+    val = val*unit.kelvin
+%}
+MRATTLE_INTEGRATOR(MRattleDrudeLangevinIntegrator)
+
 /* The plugin's XML check (the rule lives in C++): the package runs it before OpenMM's reader. */
 %{
 #include "MRattleXml.h"

@@ -1,4 +1,5 @@
 #include "MRattleBussiIntegrator.h"
+#include "MRattleDrudeLangevinIntegrator.h"
 #include "MRattleIntegrator.h"
 #include "MRattleLangevinIntegrator.h"
 #include "MRattleNoseHooverIntegrator.h"
@@ -106,6 +107,37 @@ MRattleBussiIntegrator* RigidBodyIntegratorProxy<MRattleBussiIntegrator>::create
     return integrator.release();
 }
 
+template <>
+void RigidBodyIntegratorProxy<MRattleDrudeLangevinIntegrator>::writeOwnSettings(
+    const MRattleDrudeLangevinIntegrator& integrator, SerializationNode& node) {
+    node.setDoubleProperty("temperature", integrator.getTemperature());
+    node.setDoubleProperty("friction", integrator.getFriction());
+    node.setDoubleProperty("drudeTemperature", integrator.getDrudeTemperature());
+    node.setDoubleProperty("drudeFriction", integrator.getDrudeFriction());
+    node.setDoubleProperty("maxDrudeDistance", integrator.getMaxDrudeDistance());
+    node.setIntProperty("randomSeed", integrator.getRandomNumberSeed());
+}
+
+template <>
+MRattleDrudeLangevinIntegrator* RigidBodyIntegratorProxy<MRattleDrudeLangevinIntegrator>::create(
+    const SerializationNode& node, const std::string& typeName) {
+    const double temperature = RigidBodyIntegratorSerialization::getDouble(node, "temperature", typeName);
+    const double friction = RigidBodyIntegratorSerialization::getDouble(node, "friction", typeName);
+    const double drudeTemperature = RigidBodyIntegratorSerialization::getDouble(node, "drudeTemperature", typeName);
+    const double drudeFriction = RigidBodyIntegratorSerialization::getDouble(node, "drudeFriction", typeName);
+    const double maxDrudeDistance = RigidBodyIntegratorSerialization::getDouble(node, "maxDrudeDistance", typeName);
+    const double stepSize = RigidBodyIntegratorSerialization::getStepSize(node, typeName);
+    auto integrator = construct<MRattleDrudeLangevinIntegrator>(typeName, temperature, friction, drudeTemperature,
+                                                                drudeFriction, stepSize);
+    try {
+        integrator->setMaxDrudeDistance(maxDrudeDistance);
+    } catch (const OpenMMException& e) {
+        throw OpenMMException(typeName + " XML: " + e.what());
+    }
+    integrator->setRandomNumberSeed(RigidBodyIntegratorSerialization::getInteger(node, "randomSeed", typeName));
+    return integrator.release();
+}
+
 /** Register the XML proxy of a RigidBodyIntegrator subclass under its class name: one line per integrator. */
 #define MRATTLE_REGISTER_PROXY(CLASS) \
     SerializationProxy::registerProxy(typeid(CLASS), new RigidBodyIntegratorProxy<CLASS>(#CLASS))
@@ -116,4 +148,5 @@ extern "C" OPENMM_EXPORT_MRATTLE void registerMRattleSerializationProxies() {
     MRATTLE_REGISTER_PROXY(MRattleLangevinIntegrator);
     MRATTLE_REGISTER_PROXY(MRattleNoseHooverIntegrator);
     MRATTLE_REGISTER_PROXY(MRattleBussiIntegrator);
+    MRATTLE_REGISTER_PROXY(MRattleDrudeLangevinIntegrator);
 }

@@ -31,8 +31,10 @@ inline constexpr RigidBodyIntegratorName MRattleNoseHoover{"MRattleNoseHooverInt
                                                            "IntegrateMRattleNoseHooverStep"};
 inline constexpr RigidBodyIntegratorName MRattleBussi{"MRattleBussiIntegrator", "IntegrateMRattleBussiStep"};
 inline constexpr RigidBodyIntegratorName RigidSplitting{"RigidSplittingIntegrator", "IntegrateRigidSplittingStep"};
+inline constexpr RigidBodyIntegratorName MRattleDrudeLangevin{"MRattleDrudeLangevinIntegrator",
+                                                              "IntegrateMRattleDrudeLangevinStep"};
 inline constexpr RigidBodyIntegratorName All[] = {MRattle, MRattleLangevin, MRattleNoseHoover, MRattleBussi,
-                                                  RigidSplitting};
+                                                  RigidSplitting, MRattleDrudeLangevin};
 /** The index in All of the integrator whose step kernel has this name; throws an OpenMMException if none has. */
 OPENMM_EXPORT_MRATTLE int indexOfStepKernel(const std::string& stepKernelName);
 /** The integrator whose step kernel has this name. */

@@ -110,6 +110,23 @@ public:
     void execute(OpenMM::ContextImpl& context, const RigidBodyIntegrator& integrator, bool& forcesAreValid) override;
 };
 
+/**
+ * MRattleDrudeLangevinIntegrator: MRattleLangevinIntegrator's step, its noise split between
+ * the Drude groups' rigid motion and the Drude particles' relative motion, and the hard wall
+ * after the drift.
+ */
+class ReferenceIntegrateMRattleDrudeLangevinStepKernel : public ReferenceStepKernel {
+public:
+    using ReferenceStepKernel::ReferenceStepKernel;
+    /** The Drude groups (a Drude particle in a body is refused here) and the noise's stream. */
+    void initialize(const OpenMM::System& system, const RigidBodyTopology& topology,
+                    const RigidBodyIntegrator& integrator) override;
+    void execute(OpenMM::ContextImpl& context, const RigidBodyIntegrator& integrator, bool& forcesAreValid) override;
+
+private:
+    DrudeGroups groups;
+};
+
 } // namespace MRattlePlugin
 
 #endif

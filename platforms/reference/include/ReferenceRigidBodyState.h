@@ -3,6 +3,7 @@
 
 #include "RigidBodyTopology.h"
 #include "internal/BodyShapeConstraints.h"
+#include "internal/DrudeGroups.h"
 #include "internal/RigidBodyState.h"
 #include "mrattle/RigidBodyMath.h"
 #include "openmm/System.h"
@@ -72,6 +73,19 @@ public:
     void scaleVelocities(double factor);
     /** Ornstein-Uhlenbeck over time h on every massive particle's velocity (Langevin's noise, then project()). */
     void addNoise(double friction, double temperature, double h);
+    /**
+     * The Drude integrators' noise over time h (then project()): each group's rigid part
+     * (DrudeGroups) at the friction and temperature, its Drude particles' relative motion at
+     * the Drude friction and temperature, every other massive particle as addNoise().
+     */
+    void addDrudeNoise(const DrudeGroups& groups, double friction, double temperature, double drudeFriction,
+                       double drudeTemperature, double h);
+    /**
+     * The hard wall after the drift over h: a Drude particle farther than maxDistance from its
+     * core bounces back (OpenMM's DrudeLangevin; a core in a body stays, the Drude particle
+     * alone moves); one beyond twice maxDistance fails the step.
+     */
+    void bounceDrudes(const DrudeGroups& groups, double maxDistance, double drudeTemperature, double h);
     /** The splitting baseline's position step: free particles kick and drift, each body's free-rotor splitting. */
     void rotorDriftAndReset(double h, double tolerance);
     /** A non-finite position, velocity or force fails the step; else the clock advances. */
@@ -153,6 +167,8 @@ private:
     std::vector<RigidBodyMath::Shape> shapes;
     std::unique_ptr<BodyShapeConstraints> shapeConstraints;
     std::vector<double> inverseMass;
+    std::vector<double> mass;   // 1 / inverseMass (0 for massless particles), for the Drude groups
+    std::vector<OpenMM::Vec3> drudeNoise, drudeRigid;   // addDrudeNoise's scratch
     std::vector<int> otherParticles;   // neither body members nor free: massless (virtual sites too)
     std::unique_ptr<OpenMM::ReferenceConstraints> freeConstraints;
     std::vector<std::pair<int, int> > freeConstraintAtoms;   // the free constraints, to check what they left

@@ -26,6 +26,7 @@ const ReferenceKernelMaker Makers[] = {
     make<ReferenceIntegrateMRattleNoseHooverStepKernel>,
     make<ReferenceIntegrateMRattleBussiStepKernel>,
     make<ReferenceIntegrateRigidSplittingStepKernel>,
+    make<ReferenceIntegrateMRattleDrudeLangevinStepKernel>,
 };
 static_assert(sizeof(Makers) / sizeof(Makers[0]) == sizeof(IntegratorNames::All) / sizeof(IntegratorNames::All[0]),
               "one maker per integrator of IntegratorNames::All");

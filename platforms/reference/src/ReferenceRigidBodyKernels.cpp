@@ -1,5 +1,6 @@
 #include "ReferenceRigidBodyKernels.h"
 #include "MRattleIntegrator.h"
+#include "MRattleDrudeLangevinIntegrator.h"
 #include "MRattleLangevinIntegrator.h"
 #include "RigidSplittingIntegrator.h"
 #include "openmm/reference/SimTKOpenMMRealType.h"
@@ -134,6 +135,40 @@ void ReferenceIntegrateRigidSplittingStepKernel::execute(ContextImpl& context, c
     state.rotorDriftAndReset(h, tolerance);
     state.computeForces(context, integrator, forcesAreValid);
     state.kick(0.5 * h);
+    state.project(tolerance);
+    state.endStep(h, forcesAreValid);
+}
+
+// ---- MRattleDrudeLangevinIntegrator ------------------------------------------------------
+
+void ReferenceIntegrateMRattleDrudeLangevinStepKernel::initialize(const System& system,
+                                                                  const RigidBodyTopology& topology,
+                                                                  const RigidBodyIntegrator& integrator) {
+    groups = DrudeGroups(system, topology, IntegratorNames::MRattleDrudeLangevin.integrator);
+    state.initialize(system, topology);
+    state.seedRandom(static_cast<const MRattleDrudeLangevinIntegrator&>(integrator).getRandomNumberSeed());
+}
+
+void ReferenceIntegrateMRattleDrudeLangevinStepKernel::execute(ContextImpl& context, const RigidBodyIntegrator& bound,
+                                                               bool& forcesAreValid) {
+    const MRattleDrudeLangevinIntegrator& integrator = static_cast<const MRattleDrudeLangevinIntegrator&>(bound);
+    const double h = integrator.getStepSize(), tolerance = integrator.getConstraintTolerance();
+    const double friction = integrator.getFriction(), drudeFriction = integrator.getDrudeFriction();
+    // MRattleLangevinIntegrator's step with the split noise, then the hard wall after the drift
+    // (the forces, as there, at the next step's start).
+    state.beginStep(context, integrator, forcesAreValid);
+    state.kick(h);
+    state.project(tolerance);
+    if (friction == 0 && drudeFriction == 0)
+        state.driftAndReset(0.0, h, tolerance);
+    else {
+        state.driftAndReset(0.0, 0.5 * h, tolerance);
+        state.addDrudeNoise(groups, friction, integrator.getTemperature(), drudeFriction,
+                            integrator.getDrudeTemperature(), h);
+        state.project(tolerance);
+        state.driftAndReset(0.0, 0.5 * h, tolerance);
+    }
+    state.bounceDrudes(groups, integrator.getMaxDrudeDistance(), integrator.getDrudeTemperature(), h);
     state.project(tolerance);
     state.endStep(h, forcesAreValid);
 }

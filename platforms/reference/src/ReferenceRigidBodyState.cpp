@@ -64,9 +64,11 @@ void ReferenceRigidBodyState::initialize(const System& system, const RigidBodyTo
     bodies = topology;
     const int n = system.getNumParticles();
     inverseMass.resize(n);
+    this->mass.resize(n);
     for (int i = 0; i < n; i++) {
         const double mass = system.getParticleMass(i);
         inverseMass[i] = (mass == 0.0 ? 0.0 : 1.0 / mass);
+        this->mass[i] = mass;
         hasVirtualSites |= system.isVirtualSite(i);
     }
     shapes.assign(bodies.getNumBodies(), RigidBodyMath::Shape::General);

@@ -1,0 +1,67 @@
+#ifndef MRATTLE_DRUDE_GROUPS_H_
+#define MRATTLE_DRUDE_GROUPS_H_
+
+#include "RigidBodyTopology.h"
+#include "internal/windowsExportMRattle.h"
+#include "openmm/System.h"
+#include "openmm/Vec3.h"
+#include <utility>
+#include <vector>
+
+namespace MRattlePlugin {
+
+/**
+ * The Drude oscillators of a System (its DrudeForce's pairs) grouped for the Drude
+ * integrators' split of the velocities (docs/ALGORITHM.md, "Drude oscillators"): each body
+ * with the Drude particles of its cores (an augmented body, whose rigid motions are R), each
+ * free core with its Drude particles (a free pair, whose translation is R). The rest of a
+ * group's motion, C, is the Drude particles' relative motion: 3 degrees of freedom each. A
+ * host helper every platform's state can use.
+ */
+class OPENMM_EXPORT_MRATTLE DrudeGroups {
+public:
+    struct Group {
+        std::vector<int> particles;   // the body's atoms or the free core, then the Drude particles
+        bool rotates;                 // R holds the group's rotations (an augmented body), else translations only
+    };
+    DrudeGroups() = default;
+    /**
+     * The pairs of the System's DrudeForce (none without OpenMM's Drude plugin in the build)
+     * grouped by the topology in effect. Throws an OpenMMException naming the particle for a
+     * Drude particle in a body, a Drude particle or core without mass, a Drude particle in
+     * two pairs or that is also a core.
+     */
+    DrudeGroups(const OpenMM::System& system, const RigidBodyTopology& topology, const char* integratorName);
+    const std::vector<Group>& getGroups() const {
+        return groups;
+    }
+    /** (Drude particle, core) for every pair. */
+    const std::vector<std::pair<int, int> >& getPairs() const {
+        return pairs;
+    }
+    int getNumDrudeParticles() const {
+        return pairs.size();
+    }
+    /** Whether the particle is in a group (its velocity is split; every other one is at the system's temperature). */
+    bool isGrouped(int particle) const {
+        return particle < (int) grouped.size() && grouped[particle];
+    }
+    /**
+     * R's part of the velocities v on one group: the M-orthogonal projection onto the
+     * group's rigid motions (or translation), written to out at the group's particles.
+     */
+    static void rigidPart(const Group& group, const std::vector<OpenMM::Vec3>& x, const std::vector<OpenMM::Vec3>& v,
+                          const std::vector<double>& masses, std::vector<OpenMM::Vec3>& out);
+    /** The kinetic energy of C, sum over groups of m |v - v_R|^2 / 2 (kJ/mol). */
+    double relativeKineticEnergy(const std::vector<OpenMM::Vec3>& x, const std::vector<OpenMM::Vec3>& v,
+                                 const std::vector<double>& masses) const;
+
+private:
+    std::vector<Group> groups;
+    std::vector<std::pair<int, int> > pairs;
+    std::vector<bool> grouped;
+};
+
+} // namespace MRattlePlugin
+
+#endif

@@ -1,0 +1,119 @@
+#include "internal/DrudeGroups.h"
+#include "openmm/OpenMMException.h"
+#include <Eigen/Dense>
+#include <map>
+#include <string>
+#ifdef MRATTLE_HAVE_DRUDE
+#include "openmm/DrudeForce.h"
+#endif
+
+using namespace MRattlePlugin;
+using namespace OpenMM;
+using std::vector;
+
+DrudeGroups::DrudeGroups(const System& system, const RigidBodyTopology& topology, const char* integratorName) {
+    const std::string name(integratorName);
+#ifdef MRATTLE_HAVE_DRUDE
+    for (int f = 0; f < system.getNumForces(); f++)
+        if (const auto* drude = dynamic_cast<const DrudeForce*>(&system.getForce(f)))
+            for (int k = 0; k < drude->getNumParticles(); k++) {
+                int particle, core, p2, p3, p4;
+                double charge, polarizability, aniso12, aniso34;
+                drude->getParticleParameters(k, particle, core, p2, p3, p4, charge, polarizability, aniso12, aniso34);
+                pairs.push_back({particle, core});
+            }
+#endif
+    const int n = system.getNumParticles();
+    grouped.assign(n, false);
+    vector<bool> isDrude(n, false);
+    for (const auto& pair : pairs) {
+        const int drude = pair.first, core = pair.second;
+        if (isDrude[drude])
+            throw OpenMMException(name + ": particle " + std::to_string(drude) +
+                                  " is the Drude particle of two pairs of the DrudeForce");
+        isDrude[drude] = true;
+        if (topology.getBodyOfParticle(drude) >= 0)
+            throw OpenMMException(name + ": Drude particle " + std::to_string(drude) + " is in rigid body " +
+                                  std::to_string(topology.getBodyOfParticle(drude)) +
+                                  "; a Drude particle moves relative to its core and cannot be a body member (declare "
+                                  "the bodies with addRigidBody(), without the Drude particles; their cores may be members)");
+        if (system.getParticleMass(drude) == 0 || system.getParticleMass(core) == 0)
+            throw OpenMMException(name + ": the Drude pair of particle " + std::to_string(drude) + " and core " +
+                                  std::to_string(core) + " has a particle without mass; both need one");
+    }
+    for (const auto& pair : pairs)
+        if (isDrude[pair.second])
+            throw OpenMMException(name + ": particle " + std::to_string(pair.second) +
+                                  " is both a Drude particle and the core of Drude particle " +
+                                  std::to_string(pair.first));
+    // One group per body with a Drude core, one per free core; each gets its Drude particles.
+    std::map<int, int> groupOfBody, groupOfFreeCore;
+    for (const auto& pair : pairs) {
+        const int body = topology.getBodyOfParticle(pair.second);
+        std::map<int, int>& index = (body >= 0 ? groupOfBody : groupOfFreeCore);
+        const int key = (body >= 0 ? body : pair.second);
+        auto found = index.find(key);
+        if (found == index.end()) {
+            Group group;
+            group.rotates = (body >= 0);
+            group.particles = (body >= 0 ? topology.getBodyParticles(body) : vector<int>{pair.second});
+            found = index.insert({key, (int) groups.size()}).first;
+            groups.push_back(group);
+        }
+        groups[found->second].particles.push_back(pair.first);
+    }
+    for (const Group& group : groups)
+        for (int i : group.particles)
+            grouped[i] = true;
+}
+
+void DrudeGroups::rigidPart(const Group& group, const vector<Vec3>& x, const vector<Vec3>& v,
+                            const vector<double>& masses, vector<Vec3>& out) {
+    // V = P / M; for an augmented body also w = I^+ L about the centre of mass (the
+    // pseudo-inverse: a linear group has no rotation about its axis).
+    double total = 0;
+    Vec3 center, momentum;
+    for (int i : group.particles) {
+        total += masses[i];
+        center += x[i] * masses[i];
+        momentum += v[i] * masses[i];
+    }
+    center /= total;
+    const Vec3 velocity = momentum / total;
+    Vec3 omega;
+    if (group.rotates) {
+        Eigen::Matrix3d inertia = Eigen::Matrix3d::Zero();
+        Eigen::Vector3d angular = Eigen::Vector3d::Zero();
+        for (int i : group.particles) {
+            const Vec3 r = x[i] - center, u = v[i] - velocity;
+            const Eigen::Vector3d a(r[0], r[1], r[2]);
+            inertia += masses[i] * (a.squaredNorm() * Eigen::Matrix3d::Identity() - a * a.transpose());
+            const Vec3 l = r.cross(u) * masses[i];
+            angular += Eigen::Vector3d(l[0], l[1], l[2]);
+        }
+        Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> solver(inertia);
+        const Eigen::Vector3d values = solver.eigenvalues();
+        const double floor = 1e-12 * values.cwiseAbs().maxCoeff();
+        Eigen::Vector3d w = Eigen::Vector3d::Zero();
+        for (int k = 0; k < 3; k++)
+            if (values[k] > floor)
+                w += solver.eigenvectors().col(k) * (solver.eigenvectors().col(k).dot(angular) / values[k]);
+        omega = Vec3(w[0], w[1], w[2]);
+    }
+    for (int i : group.particles)
+        out[i] = velocity + omega.cross(x[i] - center);
+}
+
+double DrudeGroups::relativeKineticEnergy(const vector<Vec3>& x, const vector<Vec3>& v,
+                                          const vector<double>& masses) const {
+    vector<Vec3> rigid(v.size());
+    double energy = 0;
+    for (const Group& group : groups) {
+        rigidPart(group, x, v, masses, rigid);
+        for (int i : group.particles) {
+            const Vec3 c = v[i] - rigid[i];
+            energy += 0.5 * masses[i] * c.dot(c);
+        }
+    }
+    return energy;
+}
