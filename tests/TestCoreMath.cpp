@@ -195,6 +195,31 @@ TEST(CoreMath, ShapeClassification) {
     EXPECT_FALSE(isLinearShape(secondMoment(kv, kinked.x.data(), centerOfMass(kv, kinked.x.data()))));
 }
 
+TEST(CoreMath, ShapeClassificationAgreesWithTheEigensolverAtEveryBend) {
+    // isLinearShape() decides bodies far from linear without the eigensolver: it must give
+    // the eigensolver's answer for every bend, the threshold's neighbourhood included.
+    std::mt19937 random(42);
+    std::uniform_real_distribution<double> uniform(-1, 1);
+    int linear = 0, general = 0;
+    for (int trial = 0; trial < 20000; trial++) {
+        const double bend = std::pow(10.0, -8 + 8 * (0.5 + 0.5 * uniform(random)));  // 1e-8 to 1 nm
+        vector<Vector3d> sites;
+        for (int i = 0; i < 3 + trial % 3; i++)
+            sites.push_back(Vector3d(0.1 * i + 0.01 * uniform(random), bend * uniform(random), bend * uniform(random)));
+        SampleBody body = makeBody(sites, vector<double>(sites.size(), 1 + 15 * (0.5 + 0.5 * uniform(random))),
+                                   Vector3d(uniform(random), uniform(random), uniform(random)));
+        const BodyView view = body.view();
+        const Matrix3d J = secondMoment(view, body.x.data(), centerOfMass(view, body.x.data()));
+        Eigen::SelfAdjointEigenSolver<Matrix3d> solver(J, Eigen::EigenvaluesOnly);
+        const Vector3d& ev = solver.eigenvalues();
+        const bool expected = ev(0) + ev(1) <= LinearMomentRatio * (ev(1) + ev(2));
+        ASSERT_EQ(expected, isLinearShape(J)) << "bend " << bend;
+        (expected ? linear : general)++;
+    }
+    EXPECT_GT(linear, 1000);
+    EXPECT_GT(general, 1000);
+}
+
 TEST(CoreMath, LinearBodyResetAndProjection) {
     SampleBody b = linearBody();
     vector<double> drifted;

@@ -38,6 +38,15 @@ Matrix3d secondMoment(const BodyView& body, const double* positions, const Vecto
 }
 
 bool isLinearShape(const Matrix3d& secondMoment) {
+    // A body far from linear needs no eigensolver (positions set at 100k atoms classify every
+    // body): with s = e0 + e1, c2 = e0 e1 + e2 s <= 1.25 tr(J) s, so c2 > 2 r tr(J)^2 gives
+    // s > 1.6 r tr(J) >= 1.6 r (e1 + e2), far beyond the solver's round-off. Lower triangle, as the solver reads it.
+    const Matrix3d& J = secondMoment;
+    const double trace = J.trace();
+    const double minors = J(0, 0) * J(1, 1) - J(1, 0) * J(1, 0) + J(0, 0) * J(2, 2) - J(2, 0) * J(2, 0) +
+                          J(1, 1) * J(2, 2) - J(2, 1) * J(2, 1);
+    if (trace > 0 && minors > 2 * LinearMomentRatio * trace * trace)
+        return false;
     Eigen::SelfAdjointEigenSolver<Matrix3d> solver(secondMoment, Eigen::EigenvaluesOnly);
     const Vector3d& ev = solver.eigenvalues();  // ascending
     // Principal moments tr(J) - ev: the smallest is ev(0) + ev(1), the largest ev(1) + ev(2).

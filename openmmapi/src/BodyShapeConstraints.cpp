@@ -2,6 +2,7 @@
 #include "mrattle/RigidBodyMath.h"
 #include <algorithm>
 #include <cmath>
+#include <utility>
 
 using namespace MRattlePlugin;
 using namespace OpenMM;
@@ -55,9 +56,9 @@ double BodyShapeConstraints::error(const vector<Vec3>& positions, int body, doub
     return worst;
 }
 
-bool BodyShapeConstraints::apply(vector<Vec3>& positions, double storageError) const {
+bool BodyShapeConstraints::apply(vector<Vec3>& positions, double storageError, vector<RigidBodyMath::Shape>* shapes) const {
     const bool constrained = applyConstraints(positions, storageError);
-    return straighten(positions) || constrained;
+    return straighten(positions, shapes) || constrained;
 }
 
 bool BodyShapeConstraints::applyExactly(vector<Vec3>& positions) const {
@@ -65,25 +66,42 @@ bool BodyShapeConstraints::applyExactly(vector<Vec3>& positions) const {
     return straighten(positions) || constrained;
 }
 
-bool BodyShapeConstraints::straighten(vector<Vec3>& positions) const {
+bool BodyShapeConstraints::straighten(vector<Vec3>& positions, vector<RigidBodyMath::Shape>* shapes) const {
     const double* x = reinterpret_cast<const double*>(positions.data());
     bool changed = false;
+    if (shapes != nullptr)
+        shapes->resize(topology.getNumBodies());
     for (int body = 0; body < topology.getNumBodies(); body++) {
         const vector<int>& atoms = topology.getBodyParticles(body);
-        if (atoms.size() < 3)
-            continue;  // two atoms are always on a line
         const RigidBodyMath::BodyView view{atoms.data(), (int) atoms.size(), topology.getMasses().data(),
                                            topology.getBodyMass(body), false};
-        const Eigen::Vector3d center = RigidBodyMath::centerOfMass(view, x);
-        const Eigen::Vector3d axis =
-            RigidBodyMath::axisToStraighten(RigidBodyMath::secondMoment(view, x, center), view.totalMass);
+        // Centre and second moment by RigidBodyTopology::classifyShapes()'s arithmetic: its shapes.
+        auto moments = [&]() {
+            const Eigen::Vector3d center = RigidBodyMath::centerOfMass(view, x);
+            return std::make_pair(center, Eigen::Matrix3d(RigidBodyMath::secondMoment(view, x, center)));
+        };
+        if (atoms.size() < 3) {  // two atoms are always on a line
+            if (shapes != nullptr)
+                (*shapes)[body] = RigidBodyMath::classifyShape(moments().second, view.totalMass);
+            continue;
+        }
+        const std::pair<Eigen::Vector3d, Eigen::Matrix3d> moment = moments();
+        const RigidBodyMath::Shape shape = RigidBodyMath::classifyShape(moment.second, view.totalMass);
+        if (shapes != nullptr)
+            (*shapes)[body] = shape;
+        if (shape != RigidBodyMath::Shape::Linear)
+            continue;
+        const Eigen::Vector3d axis = RigidBodyMath::axisToStraighten(moment.second, view.totalMass);
         if (axis.squaredNorm() == 0)
             continue;
         // The projection onto the axis through the centre keeps the centre of mass.
+        const Eigen::Vector3d& center = moment.first;
         const Vec3 c(center[0], center[1], center[2]), u(axis[0], axis[1], axis[2]);
         for (int i : atoms)
             positions[i] = c + u * (positions[i] - c).dot(u);
         changed = true;
+        if (shapes != nullptr)
+            (*shapes)[body] = RigidBodyMath::classifyShape(moments().second, view.totalMass);
     }
     return changed;
 }
@@ -101,11 +119,10 @@ bool BodyShapeConstraints::applyConstraints(vector<Vec3>& positions, double stor
             anyOff = off[body] = 1;
     if (!anyOff)
         return false;
-    const vector<Vec3> given = positions;
+    given.assign(positions.begin(), positions.end());  // a buffer kept across calls: no fresh pages
     // The same array for old and new positions, as OpenMM's applyConstraints does: SETTLE
-    // then rebuilds each water from its constraint geometry.
-    vector<double> masses = inverseMasses;
-    constraints->apply(positions, positions, masses, 1e-10);
+    // then rebuilds each water from its constraint geometry. (It only reads the masses.)
+    constraints->apply(positions, positions, inverseMasses, 1e-10);
     bool changed = false;
     for (int body = 0; body < topology.getNumBodies(); body++) {
         if (constraintsOfBody[body].empty())

@@ -36,8 +36,11 @@ public:
      *                      constraint plus what that rounding can make of it is on the
      *                      geometry, so a body corrected once is left alone when its stored
      *                      positions are set again (the correction is idempotent)
+     * @param shapes        if given, set to each body's RigidBodyMath::classifyShape() at the
+     *                      positions returned (what RigidBodyTopology::classifyShapes() gives)
      */
-    bool apply(std::vector<OpenMM::Vec3>& positions, double storageError = 0) const;
+    bool apply(std::vector<OpenMM::Vec3>& positions, double storageError = 0,
+               std::vector<RigidBodyMath::Shape>* shapes = nullptr) const;
     /**
      * The same for every constrained body however close it is (to OpenMM's constraint
      * accuracy, 1e-10): the exact shape a device platform keeps as a body's reference.
@@ -56,15 +59,17 @@ public:
 
 private:
     /** Place the atoms of each near-linear body on its axis; true if any moved. */
-    bool straighten(std::vector<OpenMM::Vec3>& positions) const;
+    bool straighten(std::vector<OpenMM::Vec3>& positions, std::vector<RigidBodyMath::Shape>* shapes = nullptr) const;
     /** The constraint-geometry correction alone (of every constrained body if all). */
     bool applyConstraints(std::vector<OpenMM::Vec3>& positions, double storageError, bool all = false) const;
     const RigidBodyTopology& topology;  // the owning state's, which outlives this
-    std::vector<double> inverseMasses;
+    mutable std::vector<double> inverseMasses;  // non-const in OpenMM's ReferenceConstraints::apply()
     std::unique_ptr<OpenMM::ReferenceConstraints> constraints;
     std::vector<std::vector<int> > constraintsOfBody;  // indices into the three arrays below
     std::vector<int> p1, p2;
     std::vector<double> distance;
+    /** applyConstraints' copy of the positions, kept to reuse its memory. */
+    mutable std::vector<OpenMM::Vec3> given;
 };
 
 } // namespace MRattlePlugin

@@ -189,8 +189,10 @@ private:
     bool rebuildsShapes() const {
         return !cc.getUseDoublePrecision();
     }
-    void setReference(const std::vector<OpenMM::Vec3>& positions);
+    /** The bodies' reference geometry and identity orientations from these positions (made exact in place). */
+    void setReference(std::vector<OpenMM::Vec3>& positions);
     std::vector<double> identityOrientations() const;
+    void uploadIdentityOrientations();
     double storageError(OpenMM::ContextImpl& context, const std::vector<OpenMM::Vec3>& positions) const;
     bool doubleMixed() const {
         return cc.getUseDoublePrecision() || cc.getUseMixedPrecision();
@@ -236,6 +238,14 @@ private:
     /** Set while updateShapes() writes corrected positions (the Context notifies the integrator again). */
     bool writingCorrectedShapes = false;
     Pass pending;
+    /** Host buffers of positions and velocities set from the host, kept to reuse their memory. */
+    std::vector<OpenMM::Vec3> hostPositions, hostVelocities, hostProjected;
+    std::vector<OpenMM::mm_float4> referenceSingle;
+    std::vector<OpenMM::mm_double4> referenceDouble;
+    std::vector<float> identitySingle;
+    std::vector<double> identityDouble;
+    /** The shape codes bodyShape holds. */
+    std::vector<int> uploadedShapeCodes;
     /** The step's index for the flag until its first launch has backed up the state, then -1. */
     int backupStepIndex = -1;
 

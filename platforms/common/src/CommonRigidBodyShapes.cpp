@@ -35,10 +35,11 @@ void CommonRigidBodyState::updateShapes(ContextImpl& context) {
         return;  // the positions this call itself is writing: classified below, once written
     ContextSelector selector(cc);
     rememberOrder();  // setting positions clears OpenMM's cell offsets
-    vector<Vec3> positions;
+    // Host buffers are members: at 100k atoms fresh ones cost more in page faults than the work.
+    vector<Vec3>& positions = hostPositions;
     context.getPositions(positions);
     FiniteValues::require(positions, "position");
-    if (shapeConstraints->apply(positions, storageError(context, positions))) {
+    if (shapeConstraints->apply(positions, storageError(context, positions), &shapes)) {
         // Back to the device once; a body on its geometry to the storage's precision is not corrected again.
         writingCorrectedShapes = true;
         try {
@@ -49,23 +50,32 @@ void CommonRigidBodyState::updateShapes(ContextImpl& context) {
         }
         writingCorrectedShapes = false;
         context.getPositions(positions);
+        shapes = bodies.classifyShapes(positions);  // as stored
     }
-    shapes = bodies.classifyShapes(positions);
     if (keepReference)
         keepReference = false;  // a checkpoint's positions: its reference came with them
     else if (rebuildsShapes())
         setReference(positions);
-    vector<int> codes(std::max(1, numBodies), shapeCode(RigidBodyMath::Shape::General));
-    for (int b = 0; b < numBodies; b++)
-        codes[b] = shapeCode(shapes[b]);
-    bodyShape.upload(codes);
+    // The device's codes change only when a body's shape does.
+    bool changed = false;
+    for (int b = 0; b < numBodies; b++) {
+        const int code = shapeCode(shapes[b]);
+        changed = changed || code != uploadedShapeCodes[b];
+        uploadedShapeCodes[b] = code;
+    }
+    if (changed)
+        bodyShape.upload(uploadedShapeCodes);
 }
 
-void CommonRigidBodyState::setReference(const vector<Vec3>& positions) {
+void CommonRigidBodyState::setReference(vector<Vec3>& exact) {
     // In double, fully constrained bodies exactly on their constraint geometry: the shape every step rebuilds.
-    vector<Vec3> exact = positions;
     shapeConstraints->applyExactly(exact);
-    vector<mm_double4> reference(std::max<size_t>(1, systemBodyAtoms.size()), mm_double4(0, 0, 0, 0));
+    // Written in the device's element type, into buffers kept across calls.
+    const bool useDouble = bodyReference.getElementSize() == sizeof(mm_double4);
+    if (useDouble)
+        referenceDouble.resize(bodyReference.getSize(), mm_double4(0, 0, 0, 0));
+    else
+        referenceSingle.resize(bodyReference.getSize(), mm_float4(0, 0, 0, 0));
     for (int b = 0, k = 0; b < numBodies; b++) {
         const vector<int>& atoms = bodies.getBodyParticles(b);
         double mass = 0;
@@ -77,11 +87,17 @@ void CommonRigidBodyState::setReference(const vector<Vec3>& positions) {
         center /= mass;
         for (int atom : atoms) {
             const Vec3 r = exact[atom] - center;
-            reference[k++] = mm_double4(r[0], r[1], r[2], 0);
+            if (useDouble)
+                referenceDouble[k++] = mm_double4(r[0], r[1], r[2], 0);
+            else
+                referenceSingle[k++] = mm_float4((float) r[0], (float) r[1], (float) r[2], 0);
         }
     }
-    bodyReference.upload(reference, true);
-    bodyOrientation.upload(identityOrientations(), true);
+    if (useDouble)
+        bodyReference.upload(referenceDouble);
+    else
+        bodyReference.upload(referenceSingle);
+    uploadIdentityOrientations();
 }
 
 vector<double> CommonRigidBodyState::identityOrientations() const {
@@ -89,6 +105,20 @@ vector<double> CommonRigidBodyState::identityOrientations() const {
     for (size_t b = 0; b < orientations.size(); b += 9)
         orientations[b] = orientations[b + 4] = orientations[b + 8] = 1;
     return orientations;
+}
+
+void CommonRigidBodyState::uploadIdentityOrientations() {
+    if (bodyOrientation.getElementSize() == sizeof(double)) {
+        if (identityDouble.empty())
+            identityDouble = identityOrientations();
+        bodyOrientation.upload(identityDouble);
+    } else {
+        if (identitySingle.empty()) {
+            const vector<double> identity = identityOrientations();
+            identitySingle.assign(identity.begin(), identity.end());
+        }
+        bodyOrientation.upload(identitySingle);
+    }
 }
 
 void CommonRigidBodyState::createCheckpoint(ContextImpl& context, std::ostream& stream) const {

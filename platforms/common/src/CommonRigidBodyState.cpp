@@ -146,7 +146,8 @@ void CommonRigidBodyState::initialize(const System& system, const RigidBodyTopol
     bodyStart.upload(starts);
     bodyAtoms.initialize<int>(cc, std::max<size_t>(1, systemBodyAtoms.size()), "mrattleBodyAtoms");
     bodyShape.initialize<int>(cc, std::max(1, numBodies), "mrattleBodyShape");
-    bodyShape.upload(vector<int>(std::max(1, numBodies), shapeCode(RigidBodyMath::Shape::General)));
+    uploadedShapeCodes.assign(std::max(1, numBodies), shapeCode(RigidBodyMath::Shape::General));
+    bodyShape.upload(uploadedShapeCodes);
     clusterStart.initialize<int>(cc, clusterStarts.size(), "mrattleClusterStart");
     clusterStart.upload(clusterStarts);
     constraintAtoms.initialize<mm_int2>(cc, std::max<size_t>(1, distances.size()), "mrattleConstraintAtoms");
@@ -228,16 +229,17 @@ void CommonRigidBodyState::mapAtoms() {
 void CommonRigidBodyState::projectVelocities(ContextImpl& context, double tolerance) {
     ContextSelector selector(cc);
     // Velocities are set from the host: checking them there costs one download per set.
-    vector<Vec3> velocities;
+    vector<Vec3>& velocities = hostVelocities;
     context.getVelocities(velocities);
     FiniteValues::require(velocities, "velocity");
     projectNow(tolerance, true);
-    vector<Vec3> projected;
+    vector<Vec3>& projected = hostProjected;
     context.getVelocities(projected);
     try {
         FiniteValues::require(projected, "velocity projected at the current positions (a degenerate constraint?)");
     } catch (...) {
-        context.setVelocities(velocities);
+        const vector<Vec3> given = velocities;  // a copy: setting them may call this again
+        context.setVelocities(given);
         throw;
     }
 }

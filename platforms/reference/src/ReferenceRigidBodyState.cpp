@@ -242,9 +242,8 @@ void ReferenceRigidBodyState::acceptNewState() {
 void ReferenceRigidBodyState::updateShapes(ContextImpl& context) {
     vector<Vec3>& x = positionsOf(context);
     FiniteValues::require(x, "position");
-    if (shapeConstraints->apply(x))
+    if (shapeConstraints->apply(x, 0, &shapes))  // the shapes at the positions it leaves
         context.computeVirtualSites();
-    shapes = bodies.classifyShapes(x);
     // A point rotates no more than a line does: both take the linear body's arithmetic.
     for (int b = 0; b < bodies.getNumBodies(); b++)
         views[b].linear = (shapes[b] != RigidBodyMath::Shape::General);
