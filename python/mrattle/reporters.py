@@ -6,6 +6,9 @@ from .integrators import INTEGRATOR_CLASSES, RigidBodyIntegrator, RigidBodyTopol
 
 #: The plugin's integrator classes with a heat bath (computeHeatBathEnergy()), which the reporter's energy columns need.
 HEAT_BATH_INTEGRATORS = [cls for cls in INTEGRATOR_CLASSES if hasattr(cls, 'computeHeatBathEnergy')]
+#: The plugin's Drude integrator classes (computeDrudeTemperature(), computeBodyTemperature()),
+#: constructed as OpenMM's Drude integrators, with a temperature and coupling for the Drude particles too.
+DRUDE_INTEGRATORS = [cls for cls in INTEGRATOR_CLASSES if hasattr(cls, 'computeDrudeTemperature')]
 
 
 def degreesOfFreedom(simulationOrContext):
