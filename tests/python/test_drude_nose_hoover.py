@@ -1,10 +1,13 @@
 """MRattleDrudeNoseHooverIntegrator from Python: OpenMM's DrudeNoseHooverIntegrator's units and
 settings, XML, and SWM4-NDP water (swm4ndp.xml) as rigid bodies with free Drude particles:
-rigid, both chains in the heat-bath energy, a checkpoint continuing bit for bit."""
+rigid, both chains in the heat-bath energy, a checkpoint continuing bit for bit; the
+StateDataReporter's body and Drude temperature columns for both Drude integrators."""
+import io
+
 import numpy as np
 import openmm
 import pytest
-from openmm import unit
+from openmm import app, unit
 
 import mrattle
 from mrattle.reporters import DRUDE_INTEGRATORS, HEAT_BATH_INTEGRATORS
@@ -75,3 +78,36 @@ def test_swm4ndp_rigid_with_both_chains_and_a_checkpoint_bit_for_bit():
                 assert abs(np.linalg.norm(again[i] - again[j]) - np.linalg.norm(start[i] - start[j])) < 1e-10
     assert integrator.computeDrudeTemperature().value_in_unit(unit.kelvin) >= 0
     assert integrator.computeBodyTemperature().value_in_unit(unit.kelvin) > 0
+
+
+@pytest.mark.parametrize('cls', DRUDE_INTEGRATORS, ids=lambda cls: cls.__name__)
+def test_reporter_writes_body_and_drude_temperatures(cls):
+    system, positions, bodies = swm4ndp(4)
+    integrator = cls(300*unit.kelvin, 10/unit.picosecond, 1*unit.kelvin, 20/unit.picosecond, 0.5*unit.femtoseconds)
+    for body in bodies:
+        integrator.addRigidBody(body)
+    simulation = app.Simulation(app.Topology(), system, integrator, openmm.Platform.getPlatformByName('Reference'))
+    simulation.context.setPositions(positions)
+    simulation.context.setVelocitiesToTemperature(300*unit.kelvin, 3)
+    log = io.StringIO()
+    heatBath = cls in HEAT_BATH_INTEGRATORS
+    simulation.reporters.append(mrattle.StateDataReporter(log, 10, step=True, temperature=True, bodyTemperature=True,
+                                                          drudeTemperature=True, conservedEnergy=heatBath))
+    simulation.step(30)
+    lines = log.getvalue().splitlines()
+    header = lines[0].split(',')
+    body, drude = header.index('"Body Temperature (K)"'), header.index('"Drude Temperature (K)"')
+    assert drude == body + 1 and body > header.index('"Temperature (K)"')
+    last = [float(value) for value in lines[-1].split(',')]
+    assert len(lines) == 4 and last[0] == 30
+    assert last[body] == pytest.approx(integrator.computeBodyTemperature().value_in_unit(unit.kelvin), rel=1e-6)
+    assert last[drude] == pytest.approx(integrator.computeDrudeTemperature().value_in_unit(unit.kelvin), rel=1e-6)
+    assert last[body] > 0 and last[drude] >= 0
+    assert ('"Conserved Energy (kJ/mole)"' in header) == heatBath
+    # An integrator without Drude temperatures is refused, naming what the columns need.
+    other = app.Simulation(app.Topology(), system, mrattle.MRattleIntegrator(0.0005),
+                           openmm.Platform.getPlatformByName('Reference'))
+    other.context.setPositions(positions)
+    with pytest.raises(ValueError, match='MRattleDrudeNoseHooverIntegrator'):
+        other.reporters.append(mrattle.StateDataReporter(io.StringIO(), 1, drudeTemperature=True))
+        other.step(1)
