@@ -9,6 +9,8 @@
 #include "DrudeTestSystem.h"
 #include "MRattleDrudeLangevinIntegrator.h"
 #include "MRattleDrudeNoseHooverIntegrator.h"
+#include "MRattleIntegrator.h"
+#include "MRattleNoseHooverIntegrator.h"
 #include "TestSupport.h"
 #include "openmm/serialization/XmlSerializer.h"
 #include <gtest/gtest.h>
@@ -57,6 +59,24 @@ std::unique_ptr<Context> equilibratedWaters(const DrudeSystem& d, RigidBodyInteg
     context->setPositions(state.getPositions());
     context->setVelocities(state.getVelocities());
     return context;
+}
+
+/** Positions after 200 steps of 1 fs of each integrator from the same start, its bodies the system's waters. */
+vector<vector<Vec3> > runEach(const DrudeSystem& d, const vector<RigidBodyIntegrator*>& integrators) {
+    vector<vector<Vec3> > positions;
+    for (RigidBodyIntegrator* integrator : integrators) {
+        std::unique_ptr<Context> context = referenceContext(d, *integrator);
+        context->setVelocitiesToTemperature(300, 4);
+        integrator->step(200);
+        positions.push_back(context->getState(State::Positions).getPositions());
+    }
+    return positions;
+}
+
+void expectBitForBit(const vector<Vec3>& expected, const vector<Vec3>& actual) {
+    for (size_t i = 0; i < expected.size(); i++)
+        for (int k = 0; k < 3; k++)
+            EXPECT_EQ(expected[i][k], actual[i][k]) << "particle " << i;
 }
 
 } // namespace
@@ -171,6 +191,33 @@ TEST(DrudeNoseHoover, AFailedStepLeavesBothChainsAsBefore) {
     EXPECT_EQ(bath, integrator.computeHeatBathEnergy());
     EXPECT_EQ(steps, context->getState(0).getStepCount());
     EXPECT_NE(0.0, bath);
+}
+
+TEST(DrudeNoseHoover, WithoutCouplingItIsMRattleIntegrator) {
+    // Both frequencies 0 and no wall: the chains rest and the velocities are not touched,
+    // so the step is MRattleIntegrator's velocity Verlet, bit for bit.
+    DrudeSystem d = drudeWaters(3, 1, 0.32);
+    MRattleIntegrator verlet(0.001);
+    MRattleDrudeNoseHooverIntegrator drude(300, 0.0, 1.0, 0.0, 0.001);
+    drude.setMaxDrudeDistance(0);
+    const vector<vector<Vec3> > positions = runEach(d, {&verlet, &drude});
+    expectBitForBit(positions[0], positions[1]);
+}
+
+TEST(DrudeNoseHoover, WithoutDrudeParticlesItIsMRattleNoseHoover) {
+    // A System with no DrudeForce pair: the body chain sees all the kinetic energy and all
+    // degrees of freedom, the Drude chain rests: MRattleNoseHooverIntegrator's step, bit for bit.
+    DrudeSystem d = drudeWaters(3, 0, 0.32);
+    for (int f = 0; f < d.system.getNumForces(); f++)
+        if (auto* drude = dynamic_cast<DrudeForce*>(&d.system.getForce(f))) {
+            d.system.removeForce(f);
+            break;
+        }
+    d.system.addForce(new DrudeForce());   // present and empty
+    MRattleNoseHooverIntegrator chain(300, 10.0, 0.001);
+    MRattleDrudeNoseHooverIntegrator drude(300, 10.0, 1.0, 20.0, 0.001);
+    const vector<vector<Vec3> > positions = runEach(d, {&chain, &drude});
+    expectBitForBit(positions[0], positions[1]);
 }
 
 TEST(DrudeNoseHoover, ADrudeParticleInABodyIsRefusedNamingIt) {

@@ -95,7 +95,8 @@ public:
     /**
      * A two-chain thermostat's scaling: each group's rigid part v_R of the velocities times
      * factor and its relative part v - v_R times drudeFactor; every other velocity times
-     * factor. Both parts lie in the constrained space: nothing to project afterwards.
+     * factor. Both parts lie in the constrained space: nothing to project afterwards. Both
+     * factors 1 leave the velocities untouched.
      */
     void scaleDrudeVelocities(const DrudeGroups& groups, double factor, double drudeFactor);
     /** The splitting baseline's position step: free particles kick and drift, each body's free-rotor splitting. */

@@ -104,6 +104,8 @@ void ReferenceRigidBodyState::computeDrudeKineticEnergies(const DrudeGroups& gro
 }
 
 void ReferenceRigidBodyState::scaleDrudeVelocities(const DrudeGroups& groups, double factor, double drudeFactor) {
+    if (factor == 1 && drudeFactor == 1)
+        return;   // chains at rest (frequencies 0): the velocities as they are, bit for bit
     phase([&] {
         const vector<Vec3>& x = positions();
         vector<Vec3>& v = velocities();
