@@ -1,5 +1,7 @@
 #include "internal/DrudeGroups.h"
 #include "openmm/OpenMMException.h"
+#include "openmm/internal/ContextImpl.h"
+#include "openmm/reference/SimTKOpenMMRealType.h"
 #include <Eigen/Dense>
 #include <map>
 #include <string>
@@ -116,4 +118,27 @@ double DrudeGroups::relativeKineticEnergy(const vector<Vec3>& x, const vector<Ve
         }
     }
     return energy;
+}
+
+double DrudeGroups::contextRelativeKineticEnergy(ContextImpl& context, const RigidBodyTopology& topology,
+                                                 const char* integratorName, int& numDrudes) {
+    const System& system = context.getSystem();
+    const DrudeGroups groups(system, topology, integratorName);
+    vector<Vec3> x, v;
+    context.getPositions(x);
+    context.getVelocities(v);
+    vector<double> masses(system.getNumParticles());
+    for (int i = 0; i < system.getNumParticles(); i++)
+        masses[i] = system.getParticleMass(i);
+    numDrudes = groups.getNumDrudeParticles();
+    return groups.relativeKineticEnergy(x, v, masses);
+}
+
+double DrudeGroups::drudeTemperature(double relativeKineticEnergy, int numDrudes) {
+    return numDrudes == 0 ? 0.0 : 2 * relativeKineticEnergy / (3 * numDrudes * BOLTZ);
+}
+
+double DrudeGroups::bodyTemperature(double kineticEnergy, double relativeKineticEnergy, int dof, int numDrudes) {
+    const int bodyDof = dof - 3 * numDrudes;
+    return bodyDof <= 0 ? 0.0 : 2 * (kineticEnergy - relativeKineticEnergy) / (bodyDof * BOLTZ);
 }

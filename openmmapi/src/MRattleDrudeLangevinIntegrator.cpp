@@ -2,9 +2,6 @@
 #include "internal/DrudeGroups.h"
 #include "internal/RigidBodyKernels.h"
 #include "openmm/OpenMMException.h"
-#include "openmm/internal/ContextImpl.h"
-#include "openmm/reference/SimTKOpenMMRealType.h"
-#include <vector>
 
 using namespace MRattlePlugin;
 using namespace OpenMM;
@@ -46,29 +43,17 @@ void MRattleDrudeLangevinIntegrator::setMaxDrudeDistance(double distance) {
 }
 
 double MRattleDrudeLangevinIntegrator::relativeKineticEnergy(int& numDrudes) {
-    // From the Context's arrays on any platform: a host computation, as a reporter's.
-    const RigidBodyTopology& bodies = getTopology();
-    const System& system = context->getSystem();
-    const DrudeGroups groups(system, bodies, getIntegratorName());
-    std::vector<Vec3> x, v;
-    context->getPositions(x);
-    context->getVelocities(v);
-    std::vector<double> masses(system.getNumParticles());
-    for (int i = 0; i < system.getNumParticles(); i++)
-        masses[i] = system.getParticleMass(i);
-    numDrudes = groups.getNumDrudeParticles();
-    return groups.relativeKineticEnergy(x, v, masses);
+    return DrudeGroups::contextRelativeKineticEnergy(*context, getTopology(), getIntegratorName(), numDrudes);
 }
 
 double MRattleDrudeLangevinIntegrator::computeDrudeTemperature() {
     int numDrudes;
-    const double energy = relativeKineticEnergy(numDrudes);
-    return numDrudes == 0 ? 0.0 : 2 * energy / (3 * numDrudes * BOLTZ);
+    const double relative = relativeKineticEnergy(numDrudes);
+    return DrudeGroups::drudeTemperature(relative, numDrudes);
 }
 
 double MRattleDrudeLangevinIntegrator::computeBodyTemperature() {
     int numDrudes;
     const double relative = relativeKineticEnergy(numDrudes);
-    const int dof = getNumDegreesOfFreedom() - 3 * numDrudes;
-    return dof <= 0 ? 0.0 : 2 * (computeKineticEnergy() - relative) / (dof * BOLTZ);
+    return DrudeGroups::bodyTemperature(computeKineticEnergy(), relative, getNumDegreesOfFreedom(), numDrudes);
 }

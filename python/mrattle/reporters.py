@@ -6,6 +6,9 @@ from .integrators import INTEGRATOR_CLASSES, RigidBodyIntegrator, RigidBodyTopol
 
 #: The plugin's integrator classes with a heat bath (computeHeatBathEnergy()), which the reporter's energy columns need.
 HEAT_BATH_INTEGRATORS = [cls for cls in INTEGRATOR_CLASSES if hasattr(cls, 'computeHeatBathEnergy')]
+#: The plugin's Drude integrator classes (computeDrudeTemperature(), computeBodyTemperature()),
+#: constructed as OpenMM's Drude integrators, with a temperature and coupling for the Drude particles too.
+DRUDE_INTEGRATORS = [cls for cls in INTEGRATOR_CLASSES if hasattr(cls, 'computeDrudeTemperature')]
 
 
 def degreesOfFreedom(simulationOrContext):
@@ -77,15 +80,22 @@ class StateDataReporter(_TemperatureReporter):
         HEAT_BATH_INTEGRATORS, MRattleNoseHooverIntegrator say, or of OpenMM's NoseHooverIntegrator)
     conservedEnergy : bool=False
         write kinetic + potential + heat-bath energy, the quantity those thermostats conserve
+    bodyTemperature : bool=False
+        write the temperature of the bodies and free particles without the Drude particles'
+        relative motion (computeBodyTemperature() of an integrator of DRUDE_INTEGRATORS)
+    drudeTemperature : bool=False
+        write the temperature of the Drude particles' motion relative to their cores
+        (computeDrudeTemperature() of an integrator of DRUDE_INTEGRATORS)
 
     The new columns follow the Temperature column (or where it would be). The temperature
     columns need a RigidBodyIntegrator; with MRattleLangevinIntegrator they use its half-step
     velocities, as its kinetic energy does. The energy columns need an integrator with
-    computeHeatBathEnergy().
+    computeHeatBathEnergy(), the Drude columns one of DRUDE_INTEGRATORS.
     """
 
     def __init__(self, file, reportInterval, *args, translationalTemperature=False, rotationalTemperature=False,
-                 heatBathEnergy=False, conservedEnergy=False, **kwargs):
+                 heatBathEnergy=False, conservedEnergy=False, bodyTemperature=False, drudeTemperature=False,
+                 **kwargs):
         super().__init__(file, reportInterval, *args, **kwargs)
         kelvin, energy = unit.kelvin, unit.kilojoules_per_mole
         bath = lambda simulation: simulation.integrator.computeHeatBathEnergy()
@@ -98,7 +108,11 @@ class StateDataReporter(_TemperatureReporter):
              lambda simulation, state: bath(simulation).value_in_unit(energy)),
             (conservedEnergy, 'Conserved Energy (kJ/mole)', 'computeHeatBathEnergy',
              lambda simulation, state: (state.getKineticEnergy() + state.getPotentialEnergy() +
-                                        bath(simulation)).value_in_unit(energy))) if flag]
+                                        bath(simulation)).value_in_unit(energy)),
+            (bodyTemperature, 'Body Temperature (K)', 'computeDrudeTemperature',
+             lambda simulation, state: simulation.integrator.computeBodyTemperature().value_in_unit(kelvin)),
+            (drudeTemperature, 'Drude Temperature (K)', 'computeDrudeTemperature',
+             lambda simulation, state: simulation.integrator.computeDrudeTemperature().value_in_unit(kelvin))) if flag]
         if conservedEnergy:
             self._needEnergy = True
 
@@ -113,6 +127,11 @@ class StateDataReporter(_TemperatureReporter):
             raise ValueError('StateDataReporter: the heatBathEnergy and conservedEnergy columns need an integrator with '
                              'computeHeatBathEnergy() (%s); the Simulation has a %s'
                              % (', '.join('mrattle.' + cls.__name__ for cls in HEAT_BATH_INTEGRATORS),
+                                type(simulation.integrator).__name__))
+        if 'computeDrudeTemperature' in needs and not hasattr(simulation.integrator, 'computeDrudeTemperature'):
+            raise ValueError('StateDataReporter: the bodyTemperature and drudeTemperature columns need a Drude '
+                             'integrator (%s); the Simulation has a %s'
+                             % (', '.join('mrattle.' + cls.__name__ for cls in DRUDE_INTEGRATORS),
                                 type(simulation.integrator).__name__))
         super().report(simulation, state)
 

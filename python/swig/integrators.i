@@ -320,6 +320,50 @@ MRATTLE_BATH_UNITS(MRattleDrudeLangevinIntegrator, setFriction, getFriction, coe
 %}
 MRATTLE_INTEGRATOR(MRattleDrudeLangevinIntegrator)
 
+/* OpenMM's DrudeNoseHooverIntegrator's units: two chains (K, 1/ps), the hard wall in nm, the heat baths in kJ/mol. */
+MRATTLE_BATH_UNITS(MRattleDrudeNoseHooverIntegrator, setCollisionFrequency, getCollisionFrequency, frequency)
+MRATTLE_HEAT_BATH_UNITS(MRattleDrudeNoseHooverIntegrator)
+%define MRATTLE_DRUDE_NOSE_HOOVER_CONSTRUCTOR(SIGNATURE)
+%feature("pythonprepend") MRattlePlugin::MRattleDrudeNoseHooverIntegrator::MRattleDrudeNoseHooverIntegrator SIGNATURE %{
+    temperature = _inUnit(temperature, unit.kelvin)
+    collisionFrequency = _inUnit(collisionFrequency, unit.picosecond**-1)
+    drudeTemperature = _inUnit(drudeTemperature, unit.kelvin)
+    drudeCollisionFrequency = _inUnit(drudeCollisionFrequency, unit.picosecond**-1)
+    stepSize = _inUnit(stepSize, unit.picosecond)
+%}
+%enddef
+MRATTLE_DRUDE_NOSE_HOOVER_CONSTRUCTOR((double temperature, double collisionFrequency, double drudeTemperature, double drudeCollisionFrequency, double stepSize))
+MRATTLE_DRUDE_NOSE_HOOVER_CONSTRUCTOR((double temperature, double collisionFrequency, double drudeTemperature, double drudeCollisionFrequency, double stepSize, int chainLength))
+MRATTLE_DRUDE_NOSE_HOOVER_CONSTRUCTOR((double temperature, double collisionFrequency, double drudeTemperature, double drudeCollisionFrequency, double stepSize, int chainLength, int numMTS))
+MRATTLE_DRUDE_NOSE_HOOVER_CONSTRUCTOR((double temperature, double collisionFrequency, double drudeTemperature, double drudeCollisionFrequency, double stepSize, int chainLength, int numMTS, int numYoshidaSuzuki))
+%typemap(doctype) double drudeTemperature "float or Quantity (temperature)"
+%typemap(doctype) double drudeCollisionFrequency "float or Quantity (1/time)"
+%feature("pythonprepend") MRattlePlugin::MRattleDrudeNoseHooverIntegrator::setDrudeTemperature %{
+    temperature = _inUnit(temperature, unit.kelvin)
+%}
+%feature("pythonprepend") MRattlePlugin::MRattleDrudeNoseHooverIntegrator::setDrudeCollisionFrequency %{
+    frequency = _inUnit(frequency, unit.picosecond**-1)
+%}
+%feature("pythonprepend") MRattlePlugin::MRattleDrudeNoseHooverIntegrator::setMaxDrudeDistance %{
+    distance = _inUnit(distance, unit.nanometer)
+%}
+%feature("pythonappend") MRattlePlugin::MRattleDrudeNoseHooverIntegrator::getDrudeTemperature %{
+    val = val*unit.kelvin
+%}
+%feature("pythonappend") MRattlePlugin::MRattleDrudeNoseHooverIntegrator::getDrudeCollisionFrequency %{
+    val = val/unit.picosecond
+%}
+%feature("pythonappend") MRattlePlugin::MRattleDrudeNoseHooverIntegrator::getMaxDrudeDistance %{
+    val = val*unit.nanometer
+%}
+%feature("pythonappend") MRattlePlugin::MRattleDrudeNoseHooverIntegrator::computeDrudeTemperature %{
+    val = val*unit.kelvin
+%}
+%feature("pythonappend") MRattlePlugin::MRattleDrudeNoseHooverIntegrator::computeBodyTemperature %{
+    val = val*unit.kelvin
+%}
+MRATTLE_INTEGRATOR(MRattleDrudeNoseHooverIntegrator)
+
 /* The plugin's XML check (the rule lives in C++): the package runs it before OpenMM's reader. */
 %{
 #include "MRattleXml.h"

@@ -1,5 +1,6 @@
 #include "MRattleBussiIntegrator.h"
 #include "MRattleDrudeLangevinIntegrator.h"
+#include "MRattleDrudeNoseHooverIntegrator.h"
 #include "MRattleIntegrator.h"
 #include "MRattleLangevinIntegrator.h"
 #include "MRattleNoseHooverIntegrator.h"
@@ -138,6 +139,42 @@ MRattleDrudeLangevinIntegrator* RigidBodyIntegratorProxy<MRattleDrudeLangevinInt
     return integrator.release();
 }
 
+template <>
+void RigidBodyIntegratorProxy<MRattleDrudeNoseHooverIntegrator>::writeOwnSettings(
+    const MRattleDrudeNoseHooverIntegrator& integrator, SerializationNode& node) {
+    node.setDoubleProperty("temperature", integrator.getTemperature());
+    node.setDoubleProperty("collisionFrequency", integrator.getCollisionFrequency());
+    node.setDoubleProperty("drudeTemperature", integrator.getDrudeTemperature());
+    node.setDoubleProperty("drudeCollisionFrequency", integrator.getDrudeCollisionFrequency());
+    node.setDoubleProperty("maxDrudeDistance", integrator.getMaxDrudeDistance());
+    node.setIntProperty("chainLength", integrator.getChainLength());
+    node.setIntProperty("numMTS", integrator.getNumMultiTimeSteps());
+    node.setIntProperty("numYoshidaSuzuki", integrator.getNumYoshidaSuzukiTimeSteps());
+}
+
+template <>
+MRattleDrudeNoseHooverIntegrator* RigidBodyIntegratorProxy<MRattleDrudeNoseHooverIntegrator>::create(
+    const SerializationNode& node, const std::string& typeName) {
+    const double temperature = RigidBodyIntegratorSerialization::getDouble(node, "temperature", typeName);
+    const double frequency = RigidBodyIntegratorSerialization::getDouble(node, "collisionFrequency", typeName);
+    const double drudeTemperature = RigidBodyIntegratorSerialization::getDouble(node, "drudeTemperature", typeName);
+    const double drudeFrequency = RigidBodyIntegratorSerialization::getDouble(node, "drudeCollisionFrequency", typeName);
+    const double maxDrudeDistance = RigidBodyIntegratorSerialization::getDouble(node, "maxDrudeDistance", typeName);
+    const int chainLength = RigidBodyIntegratorSerialization::getInteger(node, "chainLength", typeName);
+    const int numMTS = RigidBodyIntegratorSerialization::getInteger(node, "numMTS", typeName);
+    const int numYoshidaSuzuki = RigidBodyIntegratorSerialization::getInteger(node, "numYoshidaSuzuki", typeName);
+    const double stepSize = RigidBodyIntegratorSerialization::getStepSize(node, typeName);
+    auto integrator = construct<MRattleDrudeNoseHooverIntegrator>(typeName, temperature, frequency, drudeTemperature,
+                                                                  drudeFrequency, stepSize, chainLength, numMTS,
+                                                                  numYoshidaSuzuki);
+    try {
+        integrator->setMaxDrudeDistance(maxDrudeDistance);
+    } catch (const OpenMMException& e) {
+        throw OpenMMException(typeName + " XML: " + e.what());
+    }
+    return integrator.release();
+}
+
 /** Register the XML proxy of a RigidBodyIntegrator subclass under its class name: one line per integrator. */
 #define MRATTLE_REGISTER_PROXY(CLASS) \
     SerializationProxy::registerProxy(typeid(CLASS), new RigidBodyIntegratorProxy<CLASS>(#CLASS))
@@ -149,4 +186,5 @@ extern "C" OPENMM_EXPORT_MRATTLE void registerMRattleSerializationProxies() {
     MRATTLE_REGISTER_PROXY(MRattleNoseHooverIntegrator);
     MRATTLE_REGISTER_PROXY(MRattleBussiIntegrator);
     MRATTLE_REGISTER_PROXY(MRattleDrudeLangevinIntegrator);
+    MRATTLE_REGISTER_PROXY(MRattleDrudeNoseHooverIntegrator);
 }

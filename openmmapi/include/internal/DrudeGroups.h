@@ -8,6 +8,10 @@
 #include <utility>
 #include <vector>
 
+namespace OpenMM {
+class ContextImpl;
+}
+
 namespace MRattlePlugin {
 
 /**
@@ -55,6 +59,20 @@ public:
     /** The kinetic energy of C, sum over groups of m |v - v_R|^2 / 2 (kJ/mol). */
     double relativeKineticEnergy(const std::vector<OpenMM::Vec3>& x, const std::vector<OpenMM::Vec3>& v,
                                  const std::vector<double>& masses) const;
+    /**
+     * KE_C (kJ/mol) of a Context's positions and velocities, on any platform (a host
+     * computation, as a reporter's), and its number of Drude particles: what the Drude
+     * integrators' computeDrudeTemperature() and computeBodyTemperature() read.
+     */
+    static double contextRelativeKineticEnergy(OpenMM::ContextImpl& context, const RigidBodyTopology& topology,
+                                               const char* integratorName, int& numDrudes);
+    /** The Drude temperature 2 KE_C / (3 n_drude k_B), in K (0 without Drude particles). */
+    static double drudeTemperature(double relativeKineticEnergy, int numDrudes);
+    /**
+     * The bodies' and free particles' temperature 2 (KE - KE_C) / ((dof - 3 n_drude) k_B), in
+     * K (0 without such degrees of freedom), for dof degrees of freedom in all.
+     */
+    static double bodyTemperature(double kineticEnergy, double relativeKineticEnergy, int dof, int numDrudes);
 
 private:
     std::vector<Group> groups;

@@ -33,8 +33,11 @@ inline constexpr RigidBodyIntegratorName MRattleBussi{"MRattleBussiIntegrator", 
 inline constexpr RigidBodyIntegratorName RigidSplitting{"RigidSplittingIntegrator", "IntegrateRigidSplittingStep"};
 inline constexpr RigidBodyIntegratorName MRattleDrudeLangevin{"MRattleDrudeLangevinIntegrator",
                                                               "IntegrateMRattleDrudeLangevinStep"};
-inline constexpr RigidBodyIntegratorName All[] = {MRattle, MRattleLangevin, MRattleNoseHoover, MRattleBussi,
-                                                  RigidSplitting, MRattleDrudeLangevin};
+inline constexpr RigidBodyIntegratorName MRattleDrudeNoseHoover{"MRattleDrudeNoseHooverIntegrator",
+                                                                "IntegrateMRattleDrudeNoseHooverStep"};
+inline constexpr RigidBodyIntegratorName All[] = {MRattle,        MRattleLangevin,      MRattleNoseHoover,
+                                                  MRattleBussi,   RigidSplitting,       MRattleDrudeLangevin,
+                                                  MRattleDrudeNoseHoover};
 /** The index in All of the integrator whose step kernel has this name; throws an OpenMMException if none has. */
 OPENMM_EXPORT_MRATTLE int indexOfStepKernel(const std::string& stepKernelName);
 /** The integrator whose step kernel has this name. */

@@ -127,6 +127,27 @@ private:
     DrudeGroups groups;
 };
 
+/**
+ * MRattleDrudeNoseHooverIntegrator: the two chains' half steps (on KE_R and KE_C), velocity
+ * Verlet with M-RATTLE and the hard wall after the drift, the chains' half steps.
+ */
+class ReferenceIntegrateMRattleDrudeNoseHooverStepKernel : public ReferenceStepKernel {
+public:
+    using ReferenceStepKernel::ReferenceStepKernel;
+    /** The Drude groups, and both chains at rest, declared to the state. */
+    void initialize(const OpenMM::System& system, const RigidBodyTopology& topology,
+                    const RigidBodyIntegrator& integrator) override;
+    void execute(OpenMM::ContextImpl& context, const RigidBodyIntegrator& integrator, bool& forcesAreValid) override;
+    /** Both chains' energies. */
+    double computeHeatBathEnergy(OpenMM::ContextImpl& context, const RigidBodyIntegrator& integrator) override;
+
+private:
+    /** Both chains over half a step, then the velocities scaled by their factors. */
+    void chainsHalfStep(const RigidBodyIntegrator& integrator);
+    DrudeGroups groups;
+    RigidBodyThermostats::NoseHooverChain chain, drudeChain;
+};
+
 } // namespace MRattlePlugin
 
 #endif

@@ -86,6 +86,19 @@ public:
      * alone moves); one beyond twice maxDistance fails the step.
      */
     void bounceDrudes(const DrudeGroups& groups, double maxDistance, double drudeTemperature, double h);
+    /**
+     * The step's kinetic energy split by the Drude groups: relative = KE_C (the Drude
+     * particles' motion relative to their groups), rigid = KE - KE_C (the groups' rigid
+     * motion and every other particle), in kJ/mol.
+     */
+    void computeDrudeKineticEnergies(const DrudeGroups& groups, double& rigid, double& relative);
+    /**
+     * A two-chain thermostat's scaling: each group's rigid part v_R of the velocities times
+     * factor and its relative part v - v_R times drudeFactor; every other velocity times
+     * factor. Both parts lie in the constrained space: nothing to project afterwards. Both
+     * factors 1 leave the velocities untouched.
+     */
+    void scaleDrudeVelocities(const DrudeGroups& groups, double factor, double drudeFactor);
     /** The splitting baseline's position step: free particles kick and drift, each body's free-rotor splitting. */
     void rotorDriftAndReset(double h, double tolerance);
     /** A non-finite position, velocity or force fails the step; else the clock advances. */

@@ -27,6 +27,7 @@ const ReferenceKernelMaker Makers[] = {
     make<ReferenceIntegrateMRattleBussiStepKernel>,
     make<ReferenceIntegrateRigidSplittingStepKernel>,
     make<ReferenceIntegrateMRattleDrudeLangevinStepKernel>,
+    make<ReferenceIntegrateMRattleDrudeNoseHooverStepKernel>,
 };
 static_assert(sizeof(Makers) / sizeof(Makers[0]) == sizeof(IntegratorNames::All) / sizeof(IntegratorNames::All[0]),
               "one maker per integrator of IntegratorNames::All");

@@ -5,7 +5,8 @@
 #include <cmath>
 #include <string>
 
-// The Drude integrators' phases of ReferenceRigidBodyState: the split noise and the hard wall.
+// The Drude integrators' phases of ReferenceRigidBodyState: the split noise, the hard wall, and
+// the two-chain thermostat's kinetic energies and scaling.
 
 using namespace MRattlePlugin;
 using namespace OpenMM;
@@ -93,5 +94,27 @@ void ReferenceRigidBodyState::bounceDrudes(const DrudeGroups& groups, double max
                 v[core] = across2 + direction * (along2 + centre);
             }
         }
+    });
+}
+
+void ReferenceRigidBodyState::computeDrudeKineticEnergies(const DrudeGroups& groups, double& rigid, double& relative) {
+    const vector<Vec3>& v = velocities();
+    relative = groups.relativeKineticEnergy(positions(), v, mass);
+    rigid = kineticEnergyOf(v) - relative;
+}
+
+void ReferenceRigidBodyState::scaleDrudeVelocities(const DrudeGroups& groups, double factor, double drudeFactor) {
+    if (factor == 1 && drudeFactor == 1)
+        return;   // chains at rest (frequencies 0): the velocities as they are, bit for bit
+    phase([&] {
+        const vector<Vec3>& x = positions();
+        vector<Vec3>& v = velocities();
+        const int n = v.size();
+        drudeRigid.assign(n, Vec3());
+        for (const DrudeGroups::Group& group : groups.getGroups())
+            DrudeGroups::rigidPart(group, x, v, mass, drudeRigid);
+        for (int i = 0; i < n; i++)
+            v[i] = (groups.isGrouped(i) ? drudeRigid[i] * factor + (v[i] - drudeRigid[i]) * drudeFactor
+                                        : v[i] * factor);
     });
 }

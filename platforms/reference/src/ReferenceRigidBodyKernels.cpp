@@ -1,6 +1,7 @@
 #include "ReferenceRigidBodyKernels.h"
 #include "MRattleIntegrator.h"
 #include "MRattleDrudeLangevinIntegrator.h"
+#include "MRattleDrudeNoseHooverIntegrator.h"
 #include "MRattleLangevinIntegrator.h"
 #include "RigidSplittingIntegrator.h"
 #include "openmm/reference/SimTKOpenMMRealType.h"
@@ -171,4 +172,67 @@ void ReferenceIntegrateMRattleDrudeLangevinStepKernel::execute(ContextImpl& cont
     state.bounceDrudes(groups, integrator.getMaxDrudeDistance(), integrator.getDrudeTemperature(), h);
     state.project(tolerance);
     state.endStep(h, forcesAreValid);
+}
+
+// ---- MRattleDrudeNoseHooverIntegrator ----------------------------------------------------
+
+void ReferenceIntegrateMRattleDrudeNoseHooverStepKernel::initialize(const System& system,
+                                                                    const RigidBodyTopology& topology,
+                                                                    const RigidBodyIntegrator& integrator) {
+    groups = DrudeGroups(system, topology, IntegratorNames::MRattleDrudeNoseHoover.integrator);
+    state.initialize(system, topology);
+    const int length = static_cast<const MRattleDrudeNoseHooverIntegrator&>(integrator).getChainLength();
+    chain = RigidBodyThermostats::NoseHooverChain(length);
+    drudeChain = RigidBodyThermostats::NoseHooverChain(length);
+    state.declareIntegratorState({{"chainPositions", &chain.positions},
+                                  {"chainVelocities", &chain.velocities},
+                                  {"drudeChainPositions", &drudeChain.positions},
+                                  {"drudeChainVelocities", &drudeChain.velocities}},
+                                 true, false);
+}
+
+void ReferenceIntegrateMRattleDrudeNoseHooverStepKernel::chainsHalfStep(const RigidBodyIntegrator& bound) {
+    const MRattleDrudeNoseHooverIntegrator& integrator = static_cast<const MRattleDrudeNoseHooverIntegrator&>(bound);
+    const double t = 0.5 * integrator.getStepSize();
+    const int numMTS = integrator.getNumMultiTimeSteps();
+    const std::vector<double> weights =
+        RigidBodyThermostats::yoshidaSuzukiWeights(integrator.getNumYoshidaSuzukiTimeSteps());
+    const int drudeDof = 3 * groups.getNumDrudeParticles(), dof = state.getNumDegreesOfFreedom() - drudeDof;
+    // KE = KE_R + KE_C: each chain sees its own part; without Drude particles the Drude chain rests.
+    double rigid, relative;
+    state.computeDrudeKineticEnergies(groups, rigid, relative);
+    const double factor = (dof > 0 ? chain.propagate(rigid, dof, BOLTZ * integrator.getTemperature(),
+                                                     integrator.getCollisionFrequency(), t, numMTS, weights)
+                                   : 1.0);
+    const double drudeFactor =
+        (drudeDof > 0 ? drudeChain.propagate(relative, drudeDof, BOLTZ * integrator.getDrudeTemperature(),
+                                             integrator.getDrudeCollisionFrequency(), t, numMTS, weights)
+                      : 1.0);
+    state.scaleDrudeVelocities(groups, factor, drudeFactor);
+}
+
+void ReferenceIntegrateMRattleDrudeNoseHooverStepKernel::execute(ContextImpl& context, const RigidBodyIntegrator& bound,
+                                                                 bool& forcesAreValid) {
+    const MRattleDrudeNoseHooverIntegrator& integrator = static_cast<const MRattleDrudeNoseHooverIntegrator&>(bound);
+    const double h = integrator.getStepSize(), tolerance = integrator.getConstraintTolerance();
+    // The chains' half step, velocity Verlet (MRattleIntegrator's) with the hard wall after
+    // the drift, the chains' half step.
+    state.beginStep(context, integrator, forcesAreValid);
+    chainsHalfStep(integrator);
+    state.driftAndReset(0.5 * h, h, tolerance);
+    state.bounceDrudes(groups, integrator.getMaxDrudeDistance(), integrator.getDrudeTemperature(), h);
+    state.computeForces(context, integrator, forcesAreValid);
+    state.kick(0.5 * h);
+    state.project(tolerance);
+    chainsHalfStep(integrator);
+    state.endStep(h, forcesAreValid);
+}
+
+double ReferenceIntegrateMRattleDrudeNoseHooverStepKernel::computeHeatBathEnergy(ContextImpl& context,
+                                                                                 const RigidBodyIntegrator& bound) {
+    const MRattleDrudeNoseHooverIntegrator& integrator = static_cast<const MRattleDrudeNoseHooverIntegrator&>(bound);
+    const int drudeDof = 3 * groups.getNumDrudeParticles(), dof = state.getNumDegreesOfFreedom() - drudeDof;
+    return chain.energy(dof, BOLTZ * integrator.getTemperature(), integrator.getCollisionFrequency()) +
+           drudeChain.energy(drudeDof, BOLTZ * integrator.getDrudeTemperature(),
+                             integrator.getDrudeCollisionFrequency());
 }

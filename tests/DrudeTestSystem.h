@@ -1,0 +1,130 @@
+#ifndef MRATTLE_TEST_DRUDE_SYSTEM_H_
+#define MRATTLE_TEST_DRUDE_SYSTEM_H_
+
+// The Drude integrators' tests' systems (TestDrudeLangevin.cpp, TestDrudeNoseHoover.cpp):
+// rigid waters with a Drude particle on each oxygen and free polarizable ions. Only where the
+// build has OpenMM's Drude plugin.
+#ifdef MRATTLE_HAVE_DRUDE
+
+#include "RigidBodyIntegrator.h"
+#include "TestSupport.h"
+#include "openmm/Context.h"
+#include "openmm/DrudeForce.h"
+#include "openmm/NonbondedForce.h"
+#include "openmm/System.h"
+#include <cmath>
+#include <memory>
+#include <utility>
+#include <vector>
+
+namespace MRattleTest {
+namespace Drude {
+
+using namespace OpenMM;
+using MRattlePlugin::RigidBodyIntegrator;
+using std::vector;
+
+/**
+ * SWM4-NDP-like water without its M site (its charge on the oxygen core): rigid O-H-H
+ * bodies, each with a Drude particle on the oxygen; plus free polarizable ions (a core and
+ * its Drude particle). Vacuum, no cutoff; all pairs inside a molecule or pair excluded.
+ */
+struct DrudeSystem {
+    System system;
+    vector<Vec3> positions;
+    vector<vector<int> > bodies;                   // O, H, H of each water
+    vector<std::pair<int, int> > pairs;            // (Drude, core)
+};
+
+inline DrudeSystem drudeWaters(int numWaters, int numIons, double spacing) {
+    DrudeSystem d;
+    NonbondedForce* nonbonded = new NonbondedForce();
+    DrudeForce* drude = new DrudeForce();
+    d.system.addForce(nonbonded);
+    d.system.addForce(drude);
+    const double qDrude = -1.71636, alpha = 0.00097825;
+    int placed = 0;
+    auto site = [&](int k) {
+        // A cubic lattice of 3 sites per side, centred on the origin.
+        return Vec3(k % 3 - 1.0, (k / 3) % 3 - 1.0, k / 9 - 1.0) * spacing;
+    };
+    for (int w = 0; w < numWaters; w++) {
+        const Vec3 o = site(placed++);
+        const int first = d.system.getNumParticles();
+        d.system.addParticle(15.59943);   // O core (15.9994 less the Drude's 0.4)
+        d.system.addParticle(1.008);
+        d.system.addParticle(1.008);
+        d.system.addParticle(0.4);        // the Drude particle
+        nonbonded->addParticle(-1.11466 + 1.71636, 0.318395, 0.882573);
+        nonbonded->addParticle(0.55733, 1.0, 0.0);
+        nonbonded->addParticle(0.55733, 1.0, 0.0);
+        nonbonded->addParticle(qDrude, 1.0, 0.0);
+        // Geometry: O-H 0.09572 nm, H-O-H 104.52 degrees, turned by w.
+        const double half = 0.5 * 104.52 * M_PI / 180, turn = 0.7 * w;
+        const Vec3 h1(0.09572 * std::sin(half), 0.09572 * std::cos(half), 0);
+        const Vec3 h2(-0.09572 * std::sin(half), 0.09572 * std::cos(half), 0);
+        auto turned = [&](const Vec3& v) {
+            return Vec3(v[0] * std::cos(turn) - v[2] * std::sin(turn), v[1], v[0] * std::sin(turn) + v[2] * std::cos(turn));
+        };
+        d.positions.push_back(o);
+        d.positions.push_back(o + turned(h1));
+        d.positions.push_back(o + turned(h2));
+        d.positions.push_back(o + Vec3(0.001, -0.0005, 0.0007));
+        for (int i = first; i < first + 4; i++)
+            for (int j = i + 1; j < first + 4; j++)
+                nonbonded->addException(i, j, 0.0, 1.0, 0.0);
+        drude->addParticle(first + 3, first, -1, -1, -1, qDrude, alpha, 1.0, 1.0);
+        d.bodies.push_back({first, first + 1, first + 2});
+        d.pairs.push_back({first + 3, first});
+    }
+    for (int k = 0; k < numIons; k++) {
+        const Vec3 x = site(placed++);
+        const int core = d.system.addParticle(35.0), particle = d.system.addParticle(0.4);
+        nonbonded->addParticle(1.2, 0.40, 0.5);
+        nonbonded->addParticle(-1.2, 1.0, 0.0);
+        nonbonded->addException(core, particle, 0.0, 1.0, 0.0);
+        d.positions.push_back(x);
+        d.positions.push_back(x + Vec3(-0.0008, 0.0006, 0.0004));
+        drude->addParticle(particle, core, -1, -1, -1, -1.2, 0.002, 1.0, 1.0);
+        d.pairs.push_back({particle, core});
+    }
+    return d;
+}
+
+/** A Reference Context of the system with its waters declared as bodies to the integrator. */
+inline std::unique_ptr<Context> referenceContext(const DrudeSystem& d, RigidBodyIntegrator& integrator) {
+    for (const vector<int>& body : d.bodies)
+        integrator.addRigidBody(body);
+    std::unique_ptr<Context> context(new Context(d.system, integrator, platform("Reference")));
+    context->setPositions(d.positions);
+    return context;
+}
+
+inline double distance(const Vec3& a, const Vec3& b) {
+    const Vec3 d = a - b;
+    return std::sqrt(d.dot(d));
+}
+
+/** Mean and standard error of a series, from the means of 20 blocks. */
+inline std::pair<double, double> blockMean(const vector<double>& series) {
+    const int blocks = 20, length = series.size() / blocks;
+    vector<double> means(blocks, 0.0);
+    for (int b = 0; b < blocks; b++) {
+        for (int k = 0; k < length; k++)
+            means[b] += series[b * length + k];
+        means[b] /= length;
+    }
+    double mean = 0, variance = 0;
+    for (double m : means)
+        mean += m / blocks;
+    for (double m : means)
+        variance += (m - mean) * (m - mean) / (blocks - 1);
+    return {mean, std::sqrt(variance / blocks)};
+}
+
+} // namespace Drude
+} // namespace MRattleTest
+
+#endif // MRATTLE_HAVE_DRUDE
+
+#endif
