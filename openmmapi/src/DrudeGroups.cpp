@@ -13,8 +13,8 @@ using namespace MRattlePlugin;
 using namespace OpenMM;
 using std::vector;
 
-DrudeGroups::DrudeGroups(const System& system, const RigidBodyTopology& topology, const char* integratorName) {
-    const std::string name(integratorName);
+vector<std::pair<int, int> > DrudeGroups::drudePairs(const System& system) {
+    vector<std::pair<int, int> > found;
 #ifdef MRATTLE_HAVE_DRUDE
     for (int f = 0; f < system.getNumForces(); f++)
         if (const auto* drude = dynamic_cast<const DrudeForce*>(&system.getForce(f)))
@@ -22,9 +22,31 @@ DrudeGroups::DrudeGroups(const System& system, const RigidBodyTopology& topology
                 int particle, core, p2, p3, p4;
                 double charge, polarizability, aniso12, aniso34;
                 drude->getParticleParameters(k, particle, core, p2, p3, p4, charge, polarizability, aniso12, aniso34);
-                pairs.push_back({particle, core});
+                found.push_back({particle, core});
             }
 #endif
+    return found;
+}
+
+void DrudeGroups::requireSamePairs(const System& system, const char* integratorName) const {
+    // Counting is O(forces) a step; a pair's parameters changed in place are OpenMM's
+    // updateParametersInContext's business, as for every other force.
+    int count = 0;
+#ifdef MRATTLE_HAVE_DRUDE
+    for (int f = 0; f < system.getNumForces(); f++)
+        if (const auto* drude = dynamic_cast<const DrudeForce*>(&system.getForce(f)))
+            count += drude->getNumParticles();
+#endif
+    if (count != (int) pairs.size())
+        throw OpenMMException(std::string(integratorName) + ": the System has " + std::to_string(count) +
+                              " Drude particles but had " + std::to_string(pairs.size()) +
+                              " when the Context was created (a DrudeForce added or changed since), which the "
+                              "Context does not see; call Context.reinitialize()");
+}
+
+DrudeGroups::DrudeGroups(const System& system, const RigidBodyTopology& topology, const char* integratorName) {
+    const std::string name(integratorName);
+    pairs = drudePairs(system);
     const int n = system.getNumParticles();
     grouped.assign(n, false);
     vector<bool> isDrude(n, false);

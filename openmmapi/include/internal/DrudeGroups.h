@@ -46,6 +46,12 @@ public:
     int getNumDrudeParticles() const {
         return pairs.size();
     }
+    /**
+     * Throws an OpenMMException if the System's DrudeForce pairs are not those these groups
+     * were made from: a DrudeForce added or edited after the Context was created, which the
+     * Context does not see until Context::reinitialize(). A step calls it before moving anything.
+     */
+    void requireSamePairs(const OpenMM::System& system, const char* integratorName) const;
     /** Whether the particle is in a group (its velocity is split; every other one is at the system's temperature). */
     bool isGrouped(int particle) const {
         return particle < (int) grouped.size() && grouped[particle];
@@ -75,6 +81,7 @@ public:
     static double bodyTemperature(double kineticEnergy, double relativeKineticEnergy, int dof, int numDrudes);
 
 private:
+    static std::vector<std::pair<int, int> > drudePairs(const OpenMM::System& system);
     std::vector<Group> groups;
     std::vector<std::pair<int, int> > pairs;
     std::vector<bool> grouped;
