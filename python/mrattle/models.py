@@ -27,6 +27,7 @@ constraints per molecule, so OpenMM's own integrators (SETTLE) run the same Syst
 """
 import collections
 import math
+import os
 
 import numpy as np
 import openmm
@@ -212,6 +213,26 @@ def waterBox(numMolecules=216, cutoff=0.9*unit.nanometers, density=0.997*unit.gr
     _setBox(topology, system, edge)
     positions = unit.Quantity([openmm.Vec3(*x) for x in coordinates.reshape(-1, 3)], unit.nanometers)
     return Model(topology, system, positions, None)
+
+
+def swm4ndpWater(numMolecules=8):
+    """numMolecules polarizable SWM4-NDP waters (OpenMM's swm4ndp.xml: O, H1, H2, an M virtual
+    site and a Drude particle on O, added by Modeller.addExtraParticles) taken from OpenMM's
+    tip3p.pdb, in vacuum without cutoff: a small test system for the Drude integrators, whose
+    bodies are rigidBodies(model.topology, model.system) (O, H1, H2; the Drude particles free).
+    """
+    pdb = app.PDBFile(os.path.join(os.path.dirname(app.__file__), 'data', 'tip3p.pdb'))
+    waters = list(pdb.topology.residues())
+    if not 1 <= numMolecules <= len(waters):
+        raise ValueError('swm4ndpWater: numMolecules must be 1 to %d (tip3p.pdb\'s waters), got %d'
+                         % (len(waters), numMolecules))
+    forcefield = app.ForceField('swm4ndp.xml')
+    modeller = app.Modeller(pdb.topology, pdb.positions)
+    modeller.delete(waters[numMolecules:])
+    modeller.addExtraParticles(forcefield)
+    modeller.topology.setPeriodicBoxVectors(None)
+    system = forcefield.createSystem(modeller.topology, nonbondedMethod=app.NoCutoff)
+    return Model(modeller.topology, system, modeller.positions, None)
 
 
 # ---- Internals ---------------------------------------------------------------------------------

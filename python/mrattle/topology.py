@@ -1,6 +1,7 @@
 """Choosing rigid bodies from an OpenMM Topology: all waters, residues by name or by a function,
 atoms within them (by name per residue, or by a function of atoms), one body per residue or
 bodies that span several residues (a domain); the rest of the System stays flexible."""
+import openmm
 from openmm import unit
 
 # Residue names OpenMM's force fields and common PDB files use for water.
@@ -60,7 +61,8 @@ def _byNames(residue, names):
 
 def rigidBodies(topology, system, select='water', atoms=None, group='residue'):
     """The rigid bodies of the chosen atoms, each made of its massive atoms (virtual sites such
-    as TIP4P's M site are left out: they follow their parents).
+    as TIP4P's M site are left out: they follow their parents; so are the Drude particles of a
+    DrudeForce, which move relative to their cores, e.g. SWM4-NDP's or charmm_polar_2019's).
 
     Parameters
     ----------
@@ -94,18 +96,26 @@ def rigidBodies(topology, system, select='water', atoms=None, group='residue'):
     if group not in GROUPINGS:
         raise ValueError('rigidBodies: group must be one of %s, got %r' % (', '.join(GROUPINGS), group))
     chosenAtoms = _atomSelector(select, atoms)
+    drudeParticles = _drudeParticles(system)
     groups = {}
     for residue in topology.residues():
         key = residue.index if group == 'residue' else residue.chain.index if group == 'chain' else 0
         members = [atom.index for atom in chosenAtoms(residue)
                    if system.getParticleMass(atom.index).value_in_unit(unit.dalton) > 0
-                   and not system.isVirtualSite(atom.index)]
+                   and not system.isVirtualSite(atom.index) and atom.index not in drudeParticles]
         groups.setdefault(key, []).extend(members)
     bodies = [sorted(members) for key, members in sorted(groups.items()) if len(members) >= 2]
     if not bodies:
         raise ValueError('rigidBodies: no residue or atom of the Topology was selected by select=%r, atoms=%r'
                          % (select, atoms))
     return bodies
+
+
+def _drudeParticles(system):
+    """The Drude particles of the System's DrudeForces (none where OpenMM has no Drude plugin)."""
+    drudeForce = getattr(openmm, 'DrudeForce', None)
+    return {force.getParticleParameters(k)[0] for force in system.getForces()
+            if drudeForce is not None and isinstance(force, drudeForce) for k in range(force.getNumParticles())}
 
 
 def declareRigidBodies(integrator, topology, system, select='water', atoms=None, group='residue'):

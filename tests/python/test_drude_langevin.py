@@ -1,12 +1,11 @@
 """MRattleDrudeLangevinIntegrator from Python: OpenMM's DrudeLangevinIntegrator's units and
 settings, XML, and SWM4-NDP water (swm4ndp.xml, Modeller.addExtraParticles) as rigid bodies
 with their Drude particles free."""
-import os
 
 import numpy as np
 import openmm
 import pytest
-from openmm import app, unit
+from openmm import unit
 
 import mrattle
 
@@ -36,17 +35,11 @@ def test_units_like_drude_langevin():
 
 
 def swm4ndp(numMolecules):
-    """numMolecules SWM4-NDP waters (from OpenMM's tip3p.pdb) in vacuum, and their O-H-H bodies."""
-    data = os.path.join(os.path.dirname(app.__file__), 'data')
-    pdb = app.PDBFile(os.path.join(data, 'tip3p.pdb'))
-    forcefield = app.ForceField('swm4ndp.xml')
-    modeller = app.Modeller(pdb.topology, pdb.positions)
-    modeller.delete(list(modeller.topology.residues())[numMolecules:])
-    modeller.addExtraParticles(forcefield)
-    system = forcefield.createSystem(modeller.topology, nonbondedMethod=app.NoCutoff)
-    bodies = [[atom.index for atom in residue.atoms() if atom.name in ('O', 'H1', 'H2')]
-              for residue in modeller.topology.residues()]
-    return system, modeller.positions, bodies
+    """numMolecules SWM4-NDP waters in vacuum, and their O-H-H bodies (rigidBodies leaves the Drude particles out)."""
+    model = mrattle.models.swm4ndpWater(numMolecules)
+    bodies = mrattle.rigidBodies(model.topology, model.system)
+    assert all(len(body) == 3 for body in bodies)
+    return model.system, model.positions, bodies
 
 
 def test_swm4ndp_bodies_stay_rigid_with_free_drude_particles():
