@@ -13,7 +13,8 @@ loading a checkpoint, which must equal the 10 steps run straight on: checked, 'M
 otherwise), 'checkpoint' (the checkpoint's bytes: a change of the checkpoint format changes
 this line alone), 'xml' (the integrator's and the state's XML). Arrays are hashed as float64
 bytes. Models: 27 rigid waters in a PME box, three of them left free with their constraints
-(free-particle RATTLE); 27 benzenes in vacuum with an AndersenThermostat (body collisions).
+(free-particle RATTLE); 27 benzenes in vacuum with an AndersenThermostat (body collisions);
+for the Drude integrators alone, 8 SWM4-NDP waters in vacuum (rigid O-H-H, free Drude particles).
 """
 import hashlib
 import sys
@@ -32,7 +33,13 @@ INTEGRATORS = {
     'MRattleNoseHoover': lambda: mrattle.MRattleNoseHooverIntegrator(300, 10.0, 0.002),
     'MRattleBussi': lambda: _seeded(mrattle.MRattleBussiIntegrator(300, 10.0, 0.002)),
 }
+# The Drude integrators (where the build has OpenMM's Drude plugin) run the SWM4-NDP model alone.
+if hasattr(mrattle, 'MRattleDrudeLangevinIntegrator'):
+    INTEGRATORS['MRattleDrudeLangevin'] = lambda: _seeded(mrattle.MRattleDrudeLangevinIntegrator(300, 5.0, 1, 20.0, 0.001))
+    INTEGRATORS['MRattleDrudeNoseHoover'] = lambda: mrattle.MRattleDrudeNoseHooverIntegrator(300, 10.0, 1, 20.0, 0.001)
 # One CPU thread: OpenMM's CPU forces summed on several threads differ from run to run.
+# The baseline and the Drude integrators run on the host platforms only.
+HOST_ONLY = ('RigidSplitting', 'MRattleDrudeLangevin', 'MRattleDrudeNoseHoover')
 PROPERTIES = {'CPU': {'Threads': '1'}, 'OpenCL': {'Precision': 'double'}}
 
 
@@ -54,7 +61,17 @@ def benzeneWithAndersen():
     return model.system, model.positions, []
 
 
-MODELS = {'water': waterWithFreeMolecules, 'benzene': benzeneWithAndersen}
+def swm4ndpWithFreeDrudeParticles():
+    model = mrattle.models.swm4ndpWater(8)
+    return model.system, model.positions, mrattle.rigidBodies(model.topology, model.system)
+
+
+MODELS = {'water': waterWithFreeMolecules, 'benzene': benzeneWithAndersen, 'swm4ndp': swm4ndpWithFreeDrudeParticles}
+
+
+def modelsOf(integratorName):
+    drude = integratorName.startswith('MRattleDrude')
+    return [name for name in MODELS if (name == 'swm4ndp') == drude]
 
 
 def digest(*parts):
@@ -108,9 +125,9 @@ def main(path):
     platforms = [p for p in ('Reference', 'CPU', 'OpenCL') if p in mrattle.PLATFORMS]
     for platformName in platforms:
         for integratorName in INTEGRATORS:
-            if platformName in mrattle.DEVICE_PLATFORMS and integratorName == 'RigidSplitting':
-                continue  # the baseline runs on the host platforms only
-            for modelName in MODELS:
+            if platformName in mrattle.DEVICE_PLATFORMS and integratorName in HOST_ONLY:
+                continue
+            for modelName in modelsOf(integratorName):
                 for item, value in fingerprint(platformName, integratorName, modelName).items():
                     print(platformName, integratorName, modelName, item, value, file=out)
                 out.flush()
