@@ -8,7 +8,7 @@ import re
 ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
 # Names of build products, not source files.
 BUILT = {'MRattlePlatforms.h', 'MRattleVersion.h', 'libMRattlePluginReference.so'}
-SKIP_DIRS = {'.git', 'build', '.gpu'}
+SKIP_DIRS = {'.git', 'build', '.gpu', '.pytest_cache'}  # not source: VCS, builds, tool caches
 
 
 def tree():
