@@ -18,7 +18,12 @@
  *                with the fuzzer's own moments), and linear and point bodies must step;
  *   xmldepth     (issue 22) integrator documents nested up to 200,000 deep or with
  *                elements inside <Particle>: refused if deeper than MaxXmlDepth or with
- *                a stray element, never a crash.
+ *                a stray element, never a crash;
+ *   drude        (issue 44, where OpenMM's Drude plugin is built) polarizable waters and
+ *                an ion with a Drude integrator: a Drude particle in a body, a massless
+ *                core or Drude particle, a bad temperature, friction or wall, a DrudeForce
+ *                added after the Context must be refused; the rest steps and stays finite.
+ * Every category that draws an integrator draws from the test registry (integrators()).
  * Reports per category: cases, accepted, refused, crashes, silent acceptances of wrong
  * input, wrong refusals of valid input. Exit status 1 if any crash, silent acceptance or
  * wrong refusal. Usage: FuzzMRattle [--cases N] [--seed S] [--only bodies,xml,...]
@@ -34,8 +39,14 @@
 #include "mrattle/RigidBodyMath.h"
 #include <Eigen/Eigenvalues>
 #include "TestSupport.h"
+#ifdef MRATTLE_HAVE_DRUDE
+#include "DrudeTestSystem.h"
+#include "MRattleDrudeLangevinIntegrator.h"
+#include "MRattleDrudeNoseHooverIntegrator.h"
+#endif
 #include "openmm/serialization/XmlSerializer.h"
 #include <csignal>
+#include <sys/resource.h>
 #include <sys/wait.h>
 #include <unistd.h>
 #include <cmath>
@@ -56,6 +67,8 @@ using std::vector;
 namespace {
 
 bool verbose = false;
+/** Data of a case's child (bytes): a damaged size that asks for more fails fast, as std::bad_alloc. */
+const rlim_t ChildMemoryLimit = rlim_t(1) << 30;
 
 enum Outcome { Accepted = 0, Refused = 1, SilentAcceptance = 3, WrongRefusal = 4, EmptyMessage = 5, OtherException = 6 };
 
@@ -282,6 +295,7 @@ int checkpointCase(std::mt19937& random) {
     std::uniform_int_distribution<int> kind(0, 4), flips(1, 4), bit(0, 7);
     const State saved = context.getState(State::Positions | State::Velocities | State::Parameters);
     const int damage = kind(random);
+    bool openMMPartDamaged = false;
     switch (damage) {
     case 0:
     case 1:
@@ -290,7 +304,12 @@ int checkpointCase(std::mt19937& random) {
         break;
     case 2: checkpoint.resize(where(random)); break;
     case 3: checkpoint.insert(where(random), "junk"); break;
-    default: checkpoint.insert(anywhere(random), "junk"); break;   // OpenMM's part too (issue 22)
+    default: {   // OpenMM's part too (issue 22)
+        const size_t at = anywhere(random);
+        openMMPartDamaged = at < start;
+        checkpoint.insert(at, "junk");
+        break;
+    }
     }
     bool ours = false;   // refused by the integrator (OpenMM's own checks refuse before overwriting anything)
     int outcome = guarded([&] {
@@ -300,6 +319,12 @@ int checkpointCase(std::mt19937& random) {
         } catch (const OpenMMException& e) {
             ours = string(e.what()).find("OpenMM had already loaded") != string::npos;
             throw;
+        } catch (const std::bad_alloc&) {
+            // OpenMM's own reader (7.7) takes a damaged count in its part as a size and allocates
+            // it: under the child's memory limit a refusal by OpenMM, before the plugin reads anything.
+            if (!openMMPartDamaged)
+                throw;
+            return (int) Refused;
         }
         return (int) Accepted;
     });
@@ -407,13 +432,11 @@ int apiCase(std::mt19937& random) {
 // ---- issue 22: end-of-step forces, free constraints, shapes, XML depth ----------------------
 
 std::unique_ptr<RigidBodyIntegrator> anyIntegrator(std::mt19937& random, double stepSize) {
-    switch (std::uniform_int_distribution<int>(0, 4)(random)) {
-    case 0: return std::unique_ptr<RigidBodyIntegrator>(new MRattleIntegrator(stepSize));
-    case 1: return std::unique_ptr<RigidBodyIntegrator>(new RigidSplittingIntegrator(stepSize));
-    case 2: return std::unique_ptr<RigidBodyIntegrator>(new MRattleNoseHooverIntegrator(300, 10, stepSize));
-    case 3: return std::unique_ptr<RigidBodyIntegrator>(new MRattleBussiIntegrator(300, 10, stepSize));
-    default: return std::unique_ptr<RigidBodyIntegrator>(new MRattleLangevinIntegrator(300, 1, stepSize));
-    }
+    const vector<IntegratorTraits>& all = integrators();
+    const int drawn = std::uniform_int_distribution<int>(0, (int) all.size() - 1)(random);
+    if (verbose)
+        std::fprintf(stderr, "  integrator %s\n", all[drawn].name.c_str());
+    return std::unique_ptr<RigidBodyIntegrator>(all[drawn].make(stepSize));
 }
 
 /**
@@ -622,6 +645,75 @@ int xmlDepthCase(std::mt19937& random) {
     return outcome == Accepted ? (int) SilentAcceptance : outcome;
 }
 
+// ---- issue 44: Drude integrators ------------------------------------------------------------
+
+#ifdef MRATTLE_HAVE_DRUDE
+int drudeCase(std::mt19937& random) {
+    Drude::DrudeSystem d = Drude::drudeWaters(2, 1, 0.4);
+    std::uniform_int_distribution<int> coin(0, 5);
+    const double good[] = {0.0, 1.0, 300.0}, bad[] = {-1.0, NAN, INFINITY, -INFINITY};
+    bool valid = true;
+    // One setting in six drawn bad; its setter must refuse it.
+    auto setting = [&](double goodValue) {
+        if (coin(random) > 0)
+            return goodValue >= 0 ? goodValue : good[std::uniform_int_distribution<int>(0, 2)(random)];
+        valid = false;
+        return bad[std::uniform_int_distribution<int>(0, 3)(random)];
+    };
+    const bool nh = coin(random) < 3;
+    const vector<double> settings = {setting(300), setting(-1), setting(1), setting(-1), setting(0.02)};
+    const bool drudeInBody = coin(random) == 0, masslessCore = coin(random) == 0, addedLater = coin(random) == 0;
+    valid &= !drudeInBody && !masslessCore && !addedLater;
+    if (masslessCore)
+        d.system.setParticleMass(coin(random) < 3 ? d.pairs[0].second : d.pairs[2].first, 0.0);
+    if (addedLater)
+        d.system.removeForce(1);
+    if (verbose)
+        std::fprintf(stderr, "  %s settings %g %g %g %g %g, Drude in body %d, massless %d, added later %d\n",
+                     nh ? "NoseHoover" : "Langevin", settings[0], settings[1], settings[2], settings[3], settings[4],
+                     drudeInBody, masslessCore, addedLater);
+    int outcome = guarded([&] {
+        std::unique_ptr<RigidBodyIntegrator> integrator;
+        if (nh) {
+            auto* made = new MRattleDrudeNoseHooverIntegrator(300, 10, 1, 20, 0.001);
+            integrator.reset(made);
+            made->setTemperature(settings[0]);
+            made->setCollisionFrequency(settings[1]);
+            made->setDrudeTemperature(settings[2]);
+            made->setDrudeCollisionFrequency(settings[3]);
+            made->setMaxDrudeDistance(settings[4]);
+        } else {
+            auto* made = new MRattleDrudeLangevinIntegrator(300, 1, 1, 20, 0.001);
+            integrator.reset(made);
+            made->setTemperature(settings[0]);
+            made->setFriction(settings[1]);
+            made->setDrudeTemperature(settings[2]);
+            made->setDrudeFriction(settings[3]);
+            made->setMaxDrudeDistance(settings[4]);
+        }
+        for (const vector<int>& body : d.bodies)
+            integrator->addRigidBody(body);
+        if (drudeInBody)
+            integrator->addRigidBody({d.pairs[2].second, d.pairs[2].first});   // the ion and its Drude particle
+        Context context(d.system, *integrator, platform(coin(random) < 3 ? "Reference" : "CPU"));
+        context.setPositions(d.positions);
+        context.setVelocitiesToTemperature(300, 1);
+        if (addedLater) {
+            DrudeForce* drude = new DrudeForce();
+            for (const auto& pair : d.pairs)
+                drude->addParticle(pair.first, pair.second, -1, -1, -1, -1.2, 0.001, 1.0, 1.0);
+            d.system.addForce(drude);
+        }
+        integrator->step(5);
+        const State s = context.getState(State::Positions | State::Velocities);
+        return (int) (allFinite(s.getPositions()) && allFinite(s.getVelocities()) ? Accepted : SilentAcceptance);
+    });
+    if (valid && outcome == Refused)
+        return WrongRefusal;
+    return (!valid && outcome == Accepted) ? (int) SilentAcceptance : outcome;
+}
+#endif
+
 struct Counts {
     int cases = 0, accepted = 0, refused = 0, crashes = 0, silent = 0, wrongRefusals = 0, emptyMessages = 0, other = 0;
 };
@@ -631,7 +723,7 @@ struct Counts {
 int main(int argc, char** argv) {
     int cases = 50, first = 0;
     unsigned seed = 1;
-    string only = "bodies,xml,checkpoints,api,endforces,constraints,shapes,xmldepth";
+    string only = "bodies,xml,checkpoints,api,endforces,constraints,shapes,xmldepth,drude";
     bool selftest = false;
     for (int i = 1; i + 1 < argc; i += 2) {
         string flag = argv[i];
@@ -649,21 +741,28 @@ int main(int argc, char** argv) {
             selftest = std::atoi(argv[i + 1]) != 0;
     }
     loadPlugins();
-    const std::map<string, std::function<int(std::mt19937&)> > categories = {
+    std::map<string, std::function<int(std::mt19937&)> > categories = {
         {"bodies", bodiesCase}, {"xml", xmlCase}, {"checkpoints", checkpointCase}, {"api", apiCase},
         {"endforces", endForcesCase}, {"constraints", constraintsCase}, {"shapes", shapesCase},
         {"xmldepth", xmlDepthCase}};
+#ifdef MRATTLE_HAVE_DRUDE
+    categories["drude"] = drudeCase;
+#else
+    std::printf("drude: not drawn (this build has no OpenMM Drude plugin)\n");
+#endif
     bool clean = true;
     std::printf("%-12s %7s %9s %8s %8s %7s %15s %7s\n", "category", "cases", "accepted", "refused", "crashes", "silent",
                 "wrong refusals", "other");
-    for (const string name : {"bodies", "xml", "checkpoints", "api", "endforces", "constraints", "shapes", "xmldepth"}) {
-        if (only.find(name) == string::npos)
+    for (const string name : {"bodies", "xml", "checkpoints", "api", "endforces", "constraints", "shapes", "xmldepth", "drude"}) {
+        if (only.find(name) == string::npos || !categories.count(name))
             continue;
         Counts counts;
         for (int c = first; c < first + cases; c++) {
             pid_t child = fork();
             if (child == 0) {
                 alarm(60);  // a hang counts as a crash
+                const rlimit memory = {ChildMemoryLimit, ChildMemoryLimit};
+                setrlimit(RLIMIT_DATA, &memory);
                 if (selftest && c == 0)
                     std::raise(SIGSEGV);
                 std::mt19937 random(seed * 1000003u + c * 7919u + std::hash<string>()(name));
