@@ -83,6 +83,24 @@ def test_solvated_protein(tmp_path):
     assert float(line.split('constraint error')[1].split()[0]) < 1e-5
 
 
+@pytest.mark.parametrize('option', ['', '--flexible', '--gas'])
+def test_polarizable_benzene(tmp_path, option):
+    result = runExample('polarizable_benzene.py', tmp_path, '--quick', *([option] if option else []))
+    name = 'polarizable_benzene_%s_%s' % ('flexible' if option == '--flexible' else 'rigid',
+                                          'gas' if option == '--gas' else 'liquid')
+    out = tmp_path/'out'
+    assert sorted(os.listdir(str(out))) == [name + '.csv', name + '.pdb']
+    with open(str(out/(name + '.csv'))) as stream:
+        rows = list(csv.reader(stream))
+    assert [int(row[0]) for row in rows[1:]] == [20, 30, 40]  # the production's reports, after 10 steps
+    assert '100.0%' in result.stdout and 'potential energy per molecule' in result.stdout
+    summary = {line[:32].strip(): line[32:].split() for line in result.stdout.splitlines() if line.startswith('  ')}
+    assert ('density' in summary) == (option != '--gas')
+    assert ('Drude temperature' in summary) == (option != '--flexible')
+    if option != '--flexible':
+        assert float(summary['largest rigidity error'][0]) < 1e-9
+
+
 #: Each example that takes --platform, with arguments for a few steps.
 DEVICE_RUNS = [
     ('benzene_cluster.py', ['--steps', '10', '--report-interval', '5'], True),
