@@ -61,19 +61,14 @@ def _stamped(body, stamp):
 
 
 def table(rows, columns, formats=None):
-    formats = formats or {}
-    head = "| " + " | ".join(c for c, _ in columns) + " |"
-    sep = "|" + "|".join("---" for _ in columns) + "|"
-    lines = [head, sep]
-    for r in rows:
-        cells = []
-        for title, key in columns:
-            value = r.get(key, "") if isinstance(key, str) else key(r)
-            fmt = formats.get(title)
-            if fmt and isinstance(value, (int, float)) and not (isinstance(value, float) and math.isnan(value)):
-                value = fmt % value
-            cells.append(str(value))
-        lines.append("| " + " | ".join(cells) + " |")
+    """A markdown table: columns [(title, row key or function of the row)], formats {title: %-format of numbers}."""
+    def cell(r, title, key):
+        value = r.get(key, "") if isinstance(key, str) else key(r)
+        fmt = (formats or {}).get(title)
+        ok = fmt and isinstance(value, (int, float)) and not (isinstance(value, float) and math.isnan(value))
+        return str(fmt % value if ok else value)
+    lines = ["| " + " | ".join(c for c, _ in columns) + " |", "|" + "|".join("---" for _ in columns) + "|"]
+    lines += ["| " + " | ".join(cell(r, title, key) for title, key in columns) + " |" for r in rows]
     return "\n".join(lines) + "\n"
 
 
@@ -178,11 +173,10 @@ def sampling_verdict(rows, runs_per_method):
 def long_drift_section(rows, temperature, equilibrate_ps, sample_ps, radius):
     """Long NVE runs from equilibrated starts: drift with standard error per run, and what they show."""
     from suite import long_drift
-    md = ["\n## Long-run energy drift\n"]
     lengths = ", ".join("%g ps at %g fs" % (length, step) for step, length in sorted(
         {(r["step_fs"], round(r["length_ps"], 1)) for r in rows}, reverse=True))
-    md.append(method("Long-run energy drift", "Starts equilibrated %g ps at %g K; NVE %s, energy every %g ps; departed: "
-                     "beyond %g nm." % (equilibrate_ps, temperature, lengths, sample_ps, radius)))
+    md = ["\n## Long-run energy drift\n", method("Long-run energy drift", "Starts equilibrated %g ps at %g K; NVE %s, energy every %g ps; departed: "
+                     "beyond %g nm." % (equilibrate_ps, temperature, lengths, sample_ps, radius))]
     ordered = sorted(rows, key=lambda r: (-r["step_fs"], r["seed"], r["method"]))
     md.append(table(ordered, [("step (fs)", "step_fs"), ("seed", "seed"), ("method", "method"),
                               ("length (ps)", "length_ps"), ("T (K)", "temperature_K"),
@@ -194,13 +188,11 @@ def long_drift_section(rows, temperature, equilibrate_ps, sample_ps, radius):
                     {"step (fs)": "%g", "length (ps)": "%.1f", "T (K)": "%.1f", "std E (kJ/mol)": "%.3g", "farthest (nm)": "%.2f",
                      "rigidity (nm)": "%.1e", "wall (s)": "%.0f"}))
     md.append("![E(t) - E(0)](results/long_drift.png)\n")
-    lines = []
-    for s in long_drift.summary(rows):
-        spread = (", spread (standard deviation) over runs %.4f" % s["spread"]) if math.isfinite(s["spread"]) else ""
-        lines.append("- %g fs, %s: %d run%s, mean drift %+.4f kJ/mol/ns%s; %d of %d consistent with zero within 2 SE; "
-                     "largest |drift| + 2 SE %.4f kJ/mol/ns.\n" % (
-                         s["step_fs"], s["method"], s["runs"], "" if s["runs"] == 1 else "s", s["mean_drift"], spread,
-                         s["zero_within_2se"], s["runs"], s["bound"]))
+    lines = ["- %g fs, %s: %d run%s, mean drift %+.4f kJ/mol/ns%s; %d of %d consistent with zero within 2 SE; largest "
+             "|drift| + 2 SE %.4f kJ/mol/ns.\n" % (
+                 s["step_fs"], s["method"], s["runs"], "" if s["runs"] == 1 else "s", s["mean_drift"],
+                 (", spread (standard deviation) over runs %.4f" % s["spread"]) if math.isfinite(s["spread"]) else "",
+                 s["zero_within_2se"], s["runs"], s["bound"]) for s in long_drift.summary(rows)]
     if lines:
         md.append("Per step size and method:\n\n" + "".join(lines))
     md += long_drift_reading(rows)
@@ -210,12 +202,10 @@ def long_drift_section(rows, temperature, equilibrate_ps, sample_ps, radius):
 def long_drift_reading(rows, claim=0.03):
     """What the long runs show and cannot show, worded from their numbers."""
     from suite import long_drift
-    md = []
     finite = [r for r in rows if math.isfinite(r["drift_per_ns"]) and math.isfinite(r["drift_error_per_ns"])]
     if not finite:
         return ["No run gave a drift fit.\n"]
-    def name(r):
-        return "%s %g fs seed %d" % (r["method"], r["step_fs"], r["seed"])
+    name = lambda r: "%s %g fs seed %d" % (r["method"], r["step_fs"], r["seed"])  # noqa: E731
     zero = [r for r in finite if long_drift.within_se(r["drift_per_ns"], r["drift_error_per_ns"])]
     beyond = [r for r in finite if r not in zero]
     text = "\n%d of %d runs have a drift consistent with zero within 2 standard errors" % (len(zero), len(finite))
@@ -262,5 +252,4 @@ def long_drift_reading(rows, claim=0.03):
     text += ("%s. " % ("No molecule left the cluster in any run" if gone == 0 else
                        "Molecules left the cluster in %d of %d runs (%d in all)" % (
                            sum(1 for r in rows if r["departed"]), len(rows), gone)))
-    md.append(text.rstrip() + "\n")
-    return md
+    return [text.rstrip() + "\n"]

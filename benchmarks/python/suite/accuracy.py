@@ -143,10 +143,9 @@ def planar_benzene_with_constraints(total_ps, log):
 
 
 def plot(rows, path, title):
-    plt = common.pyplot()
     systems = sorted({r["system"] for r in rows})
-    fig, axes = plt.subplots(1, len(systems), figsize=(5.2 * len(systems), 4.2), squeeze=False)
-    for ax, system in zip(axes[0], systems):
+    fig, axes = common.panels(len(systems))
+    for ax, system in zip(axes, systems):
         for method in sorted({r["method"] for r in rows if r["system"] == system}):
             pts = sorted((r["step_fs"], r["fluctuation"]) for r in rows
                          if r["system"] == system and r["method"] == method and math.isfinite(r["fluctuation"]))
@@ -161,13 +160,11 @@ def plot(rows, path, title):
         ax.set_ylabel("std of total energy (kJ/mol)")
         ax.set_title(system)
         ax.legend(fontsize=8)
-    fig.suptitle(title)
-    common.save_figure(fig, path)
+    common.save_figure(fig, path, title)
 
 
 def plot_isolated(rows, path):
-    plt = common.pyplot()
-    fig, axes = plt.subplots(1, 2, figsize=(10, 4))
+    fig, axes = common.panels(2, 5, 4)
     for method in ("M-RATTLE", "splitting"):
         pts = sorted((r["step_fs"], r["energy_rel_error"], r["position_error_nm"]) for r in rows if r["method"] == method)
         axes[0].loglog([p[0] for p in pts], [max(p[1], 1e-17) for p in pts], "o-", label=method)
@@ -177,8 +174,7 @@ def plot_isolated(rows, path):
     for ax in axes:
         ax.set_xlabel("step size (fs)")
         ax.legend()
-    fig.suptitle("Isolated rigid benzene (free rotor)")
-    common.save_figure(fig, path)
+    common.save_figure(fig, path, "Isolated rigid benzene (free rotor)")
 
 
 def _forward_and_back(system, positions, velocities, method, step_ps, steps, bodies, tolerance=1e-10):

@@ -216,17 +216,22 @@ def read_csv(path, text=("method", "model", "failure")):
         return [{k: (v if k in text else float(v)) for k, v in r.items() if v != ""} for r in csv.DictReader(f)]
 
 
-def pyplot():
+def panels(count, width=5.2, height=4.2):
+    """A figure of `count` plots side by side (matplotlib without a display): (figure, axes)."""
     import matplotlib
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
-    return plt
+    fig, axes = plt.subplots(1, count, figsize=(width * count, height), squeeze=False)
+    return fig, axes[0]
 
 
-def save_figure(fig, path):
+def save_figure(fig, path, title=None):
+    import matplotlib.pyplot as plt
+    if title:
+        fig.suptitle(title)
     fig.tight_layout()
     fig.savefig(path, dpi=110)
-    pyplot().close(fig)
+    plt.close(fig)
 
 
 def water(pdb_name="tip3p.pdb", forcefield_name="amber14/tip3p.xml", barostat_seed=None):

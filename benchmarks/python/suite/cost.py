@@ -169,11 +169,10 @@ def paper_systems(platforms, batches, batch_seconds, log):
 
 
 def plot(timings, path):
-    plt = common.pyplot()
     platforms = sorted({r["platform"] for r in timings})
-    fig, axes = plt.subplots(1, len(platforms), figsize=(5.5 * len(platforms), 4.2), squeeze=False)
+    fig, axes = common.panels(len(platforms), 5.5)
     k = 5 if any(int(r["atoms_per_body"]) == 5 for r in timings) else int(timings[0]["atoms_per_body"])
-    for ax, platform in zip(axes[0], platforms):
+    for ax, platform in zip(axes, platforms):
         rows = [r for r in timings if r["platform"] == platform and int(r["atoms_per_body"]) == k]
         for integrator, threads in sorted({(r["integrator"], int(r["threads"])) for r in rows}):
             pts = sorted((int(r["bodies"]), float(r["median_us_per_step"])) for r in rows

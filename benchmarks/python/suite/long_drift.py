@@ -139,11 +139,10 @@ def summary(rows):
 
 def plot(rows, path, block_ps=5.0):
     """E(t) - E(0) per start and step size: every sample (faint), block means (bold) and the fitted line."""
-    plt = common.pyplot()
     panels = sorted({(r["step_fs"], r["seed"]) for r in rows}, key=lambda k: (-k[0], k[1]))
-    fig, axes = plt.subplots(1, len(panels), figsize=(5.2 * len(panels), 4.2), squeeze=False)
+    fig, axes = common.panels(len(panels))
     colours = {"M-RATTLE": "C0", "splitting": "C3"}
-    for ax, (step_fs, seed) in zip(axes[0], panels):
+    for ax, (step_fs, seed) in zip(axes, panels):
         for r in rows:
             t, e = r["series_time"], r["series_energy"]
             if (r["step_fs"], r["seed"]) != (step_fs, seed) or len(t) < 4:
@@ -162,5 +161,4 @@ def plot(rows, path, block_ps=5.0):
         ax.set_xlabel("time (ps)")
         ax.set_ylabel("E(t) - E(0) (kJ/mol)")
         ax.legend(fontsize=7)
-    fig.suptitle("27 rigid benzene molecules, NVE from equilibrated starts (faint: every sample)")
-    common.save_figure(fig, path)
+    common.save_figure(fig, path, "27 rigid benzene molecules, NVE from equilibrated starts (faint: every sample)")

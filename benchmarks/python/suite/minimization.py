@@ -90,8 +90,7 @@ def rms_generalized_force(system, x, f, bodies):
         np.add.at(out, pairs[:, 1], u * l[:, None])
         return out
     b = along(projected)
-    l, residual = np.zeros(len(pairs)), b.copy()
-    direction, rr = residual.copy(), residual @ residual
+    l, residual, direction, rr = np.zeros(len(pairs)), b.copy(), b.copy(), b @ b
     for _ in range(1000):
         if rr <= 1e-28 * max(b @ b, 1e-300):
             break
@@ -141,19 +140,18 @@ def compare_one(name, tolerance, system, positions, bodies, platform, repeats, p
                                   platform, repr(tolerance), repr(integrator.getConstraintTolerance())],
                                  check=True, capture_output=True, text=True).stdout.split()
     rows = []
-    for minimizer, context, energy_before, bodies_held in (('RigidBodyMinimizer', rigid, report.initialEnergy, bodies),
-                                                           ('LocalEnergyMinimizer', flexible, before, [])):
+    for minimizer, context, energy_before, held in (('RigidBodyMinimizer', rigid, report.initialEnergy, bodies),
+                                                    ('LocalEnergyMinimizer', flexible, before, [])):
         end = context.getState(getPositions=True, getForces=True, getEnergy=True)
         after = end.getPotentialEnergy().value_in_unit(unit.kilojoule_per_mole)
         forces = end.getForces(asNumpy=True).value_in_unit(unit.kilojoule_per_mole / unit.nanometer)
-        row = dict(case=name, tolerance=tolerance, minimizer=minimizer, energy_before='%.6f' % energy_before,
-                   energy_after='%.6f' % after, rms_force='%.4f' % rms_generalized_force(system, nm(end), forces,
-                                                                                         bodies_held),
-                   max_shape_change='%.3g' % shape_change(start, nm(end), bodies), seconds='%.3f' % min(seconds[minimizer]),
-                   iterations=report.iterations, evaluations=report.evaluations, note='')
-        rows.append(row)
+        rows.append(dict(case=name, tolerance=tolerance, minimizer=minimizer, energy_before='%.6f' % energy_before,
+                         energy_after='%.6f' % after, rms_force='%.4f' % rms_generalized_force(system, nm(end), forces, held),
+                         max_shape_change='%.3g' % shape_change(start, nm(end), bodies),
+                         seconds='%.3f' % min(seconds[minimizer]), iterations=report.iterations,
+                         evaluations=report.evaluations, note=''))
     same = abs(float(counted[2]) - after) <= 1e-9 * abs(after) + 1e-9
-    row.update(iterations=int(counted[0]), evaluations=int(counted[1]), note=(
+    rows[1].update(iterations=int(counted[0]), evaluations=int(counted[1]), note=(
         'iterations counted in a second run that ended at the same energy' if same else
         'iterations counted in a second run that ended ELSEWHERE: count not valid'))
     return rows
@@ -262,8 +260,7 @@ def starts(argv=None):
                                   *stats['openmm_energy'], *stats['gap'], lower, len(mine),
                                   stats['rigid_rms_force'][0], *stats['openmm_rms_force'], *stats['matched_gap']))
 
-    plt = common.pyplot()
-    fig, ax = plt.subplots(figsize=(6, 4.2))
+    fig, (ax,) = common.panels(1, 6)
     tolerances = [t for t, _ in summary]
     for key, label in (('rigid_energy', 'RigidBodyMinimizer'), ('openmm_energy', 'LocalEnergyMinimizer (SETTLE)')):
         ax.errorbar(tolerances, [s[key][0] for _, s in summary], yerr=[s[key][1] for _, s in summary],

@@ -116,8 +116,7 @@ def compare(results):
 
 
 def plot(results, path):
-    plt = common.pyplot()
-    fig, axes = plt.subplots(1, 3, figsize=(15, 4.2))
+    fig, axes = common.panels(3, 5)
     for method, r in results.items():
         axes[0].hist(np.concatenate(r["temperature"]), bins=30, density=True, histtype="step", lw=1.5, label=method)
         axes[1].hist(np.concatenate(r["translational"]) / KB, bins=30, density=True, histtype="step", lw=1.5,
@@ -131,5 +130,4 @@ def plot(results, path):
     axes[2].set_xlabel("intermolecular C-C distance (nm)")
     for ax in axes:
         ax.legend(fontsize=8)
-    fig.suptitle("27 rigid benzene molecules, NVE: M-RATTLE vs splitting")
-    common.save_figure(fig, path)
+    common.save_figure(fig, path, "27 rigid benzene molecules, NVE: M-RATTLE vs splitting")

@@ -12,8 +12,8 @@ from openmm import unit
 
 import mrattle
 
-from .common import (KB, TEMPERATURE, block_mean, context as start_context, density, equilibrate, masses as masses_of, read_csv,
-                     temperatures, water, water_integrator, write_csv)
+from .common import (KB, TEMPERATURE, block_mean, context as start_context, density, equilibrate, masses as masses_of,
+                     read_csv, temperatures, water, water_integrator, write_csv)
 from .stats import drift_with_error
 
 METHODS = ('M-RATTLE NVE', 'M-RATTLE Nose-Hoover chain', 'M-RATTLE CSVR', 'LangevinMiddle + SETTLE')
@@ -22,9 +22,8 @@ SAMPLE_FS = 10.0  # between samples of every run
 
 
 def diffusion(times, oxygens, segments=4):
-    """D (1e-5 cm^2/s) from the oxygens' mean-squared displacement: in each of `segments` equal
-    time segments of the run, the slope over lags of 20-60 % of the segment (all time origins
-    in it), D = slope/6; mean and standard error over the segments."""
+    """D (1e-5 cm^2/s) from the oxygens' mean-squared displacement: in each of `segments` equal time segments,
+    the slope over lags of 20-60 % of it (all time origins), D = slope/6; mean and standard error."""
     t = np.asarray(times) - times[0]
     x = np.asarray(oxygens)  # frames x molecules x 3, unwrapped
     values = []
@@ -55,19 +54,17 @@ def run_series(method, step_fs, ps, start, system, bodies, threads, sample_fs=SA
         state = context.getState(getEnergy=True, getVelocities=not rigid, getPositions=keep_oxygens)
         kinetic = state.getKineticEnergy().value_in_unit(unit.kilojoule_per_mole)
         potential = state.getPotentialEnergy().value_in_unit(unit.kilojoule_per_mole)
-        series['time'].append(state.getTime().value_in_unit(unit.picosecond))
-        series['kinetic'].append(kinetic)
-        series['potential'].append(potential)
-        series['conserved'].append(kinetic + potential + (bath().value_in_unit(unit.kilojoule_per_mole) if bath else 0))
-        series['density'].append(density(state, masses))
         if rigid:
-            series['Ttrans'].append(integrator.computeTranslationalTemperature().value_in_unit(unit.kelvin))
-            series['Trot'].append(integrator.computeRotationalTemperature().value_in_unit(unit.kelvin))
+            split = (integrator.computeTranslationalTemperature().value_in_unit(unit.kelvin),
+                     integrator.computeRotationalTemperature().value_in_unit(unit.kelvin))
         else:  # its half-step velocities, as LangevinMiddle reports them
-            v = state.getVelocities(asNumpy=True).value_in_unit(unit.nanometer / unit.picosecond)
-            ttrans, trot = temperatures(v, masses, bodies, True)
-            series['Ttrans'].append(ttrans)
-            series['Trot'].append(trot)
+            split = temperatures(state.getVelocities(asNumpy=True).value_in_unit(unit.nanometer / unit.picosecond),
+                                 masses, bodies, True)
+        for key, value in (('time', state.getTime().value_in_unit(unit.picosecond)), ('kinetic', kinetic),
+                           ('potential', potential), ('Ttrans', split[0]), ('Trot', split[1]),
+                           ('conserved', kinetic + potential + (bath().value_in_unit(unit.kilojoule_per_mole) if bath else 0)),
+                           ('density', density(state, masses))):
+            series[key].append(value)
         if keep_oxygens:
             oxygens.append(state.getPositions(asNumpy=True).value_in_unit(unit.nanometer)[oxygen])
         if not math.isfinite(series['conserved'][-1]):
