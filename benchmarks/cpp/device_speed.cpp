@@ -28,14 +28,11 @@ namespace {
 
 using Clock = std::chrono::steady_clock;
 
-double secondsSince(Clock::time_point start) {
-    return std::chrono::duration<double>(Clock::now() - start).count();
-}
+double secondsSince(Clock::time_point start) { return std::chrono::duration<double>(Clock::now() - start).count(); }
 
-double median(vector<double> values) {
-    std::sort(values.begin(), values.end());
-    const size_t n = values.size();
-    return n % 2 == 1 ? values[n / 2] : 0.5 * (values[n / 2 - 1] + values[n / 2]);
+double median(vector<double> v) {
+    std::sort(v.begin(), v.end());
+    return v.size() % 2 == 1 ? v[v.size() / 2] : 0.5 * (v[v.size() / 2 - 1] + v[v.size() / 2]);
 }
 
 /** The items of a comma-separated option value. */
@@ -62,7 +59,7 @@ Options parse(int argc, char** argv) {
     options.plugins = split(MRATTLE_DEVICE_PLUGINS);
 #endif
     for (int i = 1; i < argc; i++) {
-        string flag = argv[i];
+        const string flag = argv[i];
         if (flag == "--small") {
             options.watersPerSide = {6};
             options.repeats = 2;
@@ -72,11 +69,14 @@ Options parse(int argc, char** argv) {
         }
         if (i + 1 >= argc)
             throw std::runtime_error("device_speed: " + flag + " needs a value");
-        string value = argv[++i];
-        if (flag == "--platform")
-            options.platform = value;
-        else if (flag == "--precision")
-            options.precision = value;
+        const string value = argv[++i];
+        std::map<string, string*> texts = {{"--platform", &options.platform}, {"--precision", &options.precision},
+                                           {"--out", &options.out}, {"--ratios", &options.ratios}};
+        std::map<string, vector<string>*> lists = {{"--plugins", &options.plugins}, {"--systems", &options.systems}};
+        if (texts.count(flag))
+            *texts[flag] = value;
+        else if (lists.count(flag))
+            *lists[flag] = split(value);
         else if (flag == "--waters-per-side") {
             options.watersPerSide.clear();
             for (const string& part : split(value))
@@ -86,14 +86,6 @@ Options parse(int argc, char** argv) {
             options.repeats = std::stoi(value);
         else if (flag == "--batch-seconds")
             options.batchSeconds = std::stod(value);
-        else if (flag == "--plugins")
-            options.plugins = split(value);
-        else if (flag == "--systems")
-            options.systems = split(value);
-        else if (flag == "--out")
-            options.out = value;
-        else if (flag == "--ratios")
-            options.ratios = value;
         else
             throw std::runtime_error("device_speed: unknown option " + flag);
     }
@@ -125,9 +117,8 @@ vector<Vec3> randomRotation(std::mt19937& generator) {
         c = normal(generator);
         norm += c * c;
     }
-    for (double& c : q)
-        c /= std::sqrt(norm);
-    const double w = q[0], x = q[1], y = q[2], z = q[3];
+    norm = std::sqrt(norm);
+    const double w = q[0] / norm, x = q[1] / norm, y = q[2] / norm, z = q[3] / norm;
     return {Vec3(1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y)),
             Vec3(2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x)),
             Vec3(2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y))};
@@ -244,13 +235,13 @@ struct Run {
 /** Time to download the positions alone (the synchronisation ending each batch). */
 double syncSeconds(Context& context) {
     context.getState(State::Positions);
-    vector<double> times;
+    double fastest = INFINITY;
     for (int i = 0; i < 3; i++) {
         Clock::time_point start = Clock::now();
         context.getState(State::Positions);
-        times.push_back(secondsSince(start));
+        fastest = std::min(fastest, secondsSince(start));
     }
-    return *std::min_element(times.begin(), times.end());
+    return fastest;
 }
 
 /** Seconds per step over a batch of steps, ended by a download of the positions. */
@@ -262,19 +253,16 @@ double timeBatch(Run& run, int steps, double sync) {
 }
 
 /** Largest error (nm) of any O-H or H-H distance, or infinity if a position is not finite. */
-double geometryError(const vector<Vec3>& positions) {
+double geometryError(const vector<Vec3>& x) {
     double worst = 0;
-    for (size_t o = 0; o + 2 < positions.size(); o += 3) {
-        const double lengths[3] = {OH, OH, HH};
-        const int pairs[3][2] = {{0, 1}, {0, 2}, {1, 2}};
-        for (int p = 0; p < 3; p++) {
-            Vec3 d = positions[o + pairs[p][0]] - positions[o + pairs[p][1]];
-            double error = std::fabs(std::sqrt(d.dot(d)) - lengths[p]);
+    for (size_t o = 0; o + 2 < x.size(); o += 3)
+        for (const double error : {std::fabs(std::sqrt((x[o + 1] - x[o]).dot(x[o + 1] - x[o])) - OH),
+                                   std::fabs(std::sqrt((x[o + 2] - x[o]).dot(x[o + 2] - x[o])) - OH),
+                                   std::fabs(std::sqrt((x[o + 2] - x[o + 1]).dot(x[o + 2] - x[o + 1])) - HH)}) {
             if (!std::isfinite(error))
                 return INFINITY;
             worst = std::max(worst, error);
         }
-    }
     return worst;
 }
 
@@ -322,8 +310,7 @@ int main(int argc, char** argv) {
         }
         Platform* found = nullptr;
         for (int i = 0; i < Platform::getNumPlatforms(); i++)
-            if (Platform::getPlatform(i).getName() == options.platform)
-                found = &Platform::getPlatform(i);
+            found = Platform::getPlatform(i).getName() == options.platform ? &Platform::getPlatform(i) : found;
         if (found == nullptr) {
             std::cerr << "device_speed: OpenMM " << Platform::getOpenMMVersion() << " has no " << options.platform
                       << " platform here (see the plugin load failures above)\n";
@@ -392,13 +379,9 @@ int main(int argc, char** argv) {
                 for (int r = 0; r < options.repeats; r++)
                     for (size_t i = 0; i < runs.size(); i++)
                         runs[i].secondsPerStep.push_back(timeBatch(runs[i], runs[i].steps, sync[i]));
-                std::map<string, double> medianSeconds;
-                std::map<string, const vector<double>*> batchSeconds;
                 for (size_t i = 0; i < runs.size(); i++) {
                     Run& run = runs[i];
                     const double m = median(run.secondsPerStep);
-                    medianSeconds[run.name] = m;
-                    batchSeconds[run.name] = &run.secondsPerStep;
                     auto range = std::minmax_element(run.secondsPerStep.begin(), run.secondsPerStep.end());
                     State state = run.context->getState(State::Positions | State::Energy);
                     const double error = geometryError(state.getPositions());
@@ -416,13 +399,12 @@ int main(int argc, char** argv) {
                 }
                 // The targets: integration (bare) at most 1.2x SETTLE's time; ns/day with PME at
                 // least 0.95x OpenMM's (time ratio at most 1/0.95).
-                for (const auto& pair : {std::make_pair("mrattle", "verlet_settle"),
-                                         std::make_pair("mrattle_langevin", "langevin_settle")}) {
-                    const double ratio = medianSeconds[pair.first] / medianSeconds[pair.second];
-                    const string measure = string(pair.first) + (pme ? " ns/day over " : " time per step over ") + pair.second;
-                    const double value = pme ? 1 / ratio : ratio;
+                for (int mine : {1, 3}) {  // names[mine] against names[mine - 1]
+                    const vector<double>& a = runs[mine].secondsPerStep, &b = runs[mine - 1].secondsPerStep;
+                    const double ratio = median(a) / median(b), value = pme ? 1 / ratio : ratio;
+                    const string measure = names[mine] + (pme ? " ns/day over " : " time per step over ") + names[mine - 1];
                     const bool met = pme ? value >= 0.95 : value <= 1.2;
-                    const PairedRatio paired = pairedRatio(*batchSeconds[pair.first], *batchSeconds[pair.second], pme);
+                    const PairedRatio paired = pairedRatio(a, b, pme);
                     ratios << systemName << "," << atoms << "," << measure << "," << std::setprecision(3) << value
                            << "," << (pme ? ">= 0.95" : "<= 1.2") << "," << (met ? "yes" : "no") << ","
                            << paired.ratio << "," << paired.low << "," << paired.high << std::endl;

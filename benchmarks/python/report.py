@@ -61,28 +61,24 @@ def _stamped(body, stamp):
 
 
 def table(rows, columns, formats=None):
-    formats = formats or {}
-    head = "| " + " | ".join(c for c, _ in columns) + " |"
-    sep = "|" + "|".join("---" for _ in columns) + "|"
-    lines = [head, sep]
-    for r in rows:
-        cells = []
-        for title, key in columns:
-            value = r.get(key, "") if isinstance(key, str) else key(r)
-            fmt = formats.get(title)
-            if fmt and isinstance(value, (int, float)) and not (isinstance(value, float) and math.isnan(value)):
-                value = fmt % value
-            cells.append(str(value))
-        lines.append("| " + " | ".join(cells) + " |")
+    """A markdown table: columns [(title, row key or function of the row)], formats {title: %-format of numbers}."""
+    def cell(r, title, key):
+        value = r.get(key, "") if isinstance(key, str) else key(r)
+        fmt = (formats or {}).get(title)
+        ok = fmt and isinstance(value, (int, float)) and not (isinstance(value, float) and math.isnan(value))
+        return str(fmt % value if ok else value)
+    lines = ["| " + " | ".join(c for c, _ in columns) + " |", "|" + "|".join("---" for _ in columns) + "|"]
+    lines += ["| " + " | ".join(cell(r, title, key) for title, key in columns) + " |" for r in rows]
     return "\n".join(lines) + "\n"
 
 
-def accuracy_section(iso, rows, order_rows, planar, ccma, quick):
-    md = ["\n## Accuracy\n"]
-    md.append("### Isolated rigid benzene (free rotor)\n")
-    md.append("One benzene with random rigid-body velocities at 300 K, no external force, run for the same time "
-              "with each step size on the Reference platform. Position error: largest atom deviation at the end "
-              "from an M-RATTLE run with a 16 times smaller step than the smallest shown.\n")
+def method(section, detail=""):
+    """The line pointing at the section's method in docs/benchmarks.md, with the run's own settings."""
+    return "%sThe method: `docs/benchmarks.md`, \"%s\".\n" % (detail + " " if detail else "", section)
+
+
+def accuracy_section(iso, rows, order_rows, planar, quick):
+    md = ["\n## Accuracy\n", "### Isolated rigid benzene (free rotor)\n", method("Accuracy")]
     md.append(table(iso, [("method", "method"), ("step (fs)", "step_fs"), ("max abs(E-E0)/E0", "energy_rel_error"),
                           ("abs(L-L0)/abs(L0)", "angmom_rel_error"), ("position error (nm)", "position_error_nm"),
                           ("rigidity (nm)", "rigidity_nm")],
@@ -90,13 +86,6 @@ def accuracy_section(iso, rows, order_rows, planar, ccma, quick):
                      "rigidity (nm)": "%.1e"}))
     md.append("![isolated benzene](results/accuracy_isolated_benzene.png)\n")
     md.append("### Energy error against step size\n")
-    md.append("NVE from the models' lattice starts (the 27-benzene cluster on the CPU platform with one thread, "
-              "the 5-site cluster on Reference). Fluctuation: standard deviation of the total energy over the run; "
-              "drift: slope of a least-squares line through it, with its standard error (inflated by the "
-              "residuals' autocorrelation). These runs are short (4 ps) and start from a lattice that is still "
-              "relaxing: a drift within about two standard errors of zero is not a measured drift, and the "
-              "fluctuation, not the drift, is what these runs compare; for drift, see the long runs from "
-              "equilibrated starts in \"Long-run energy drift\" below. Runs that failed say why.\n")
     md.append(table(rows, [("system", "system"), ("method", "method"), ("step (fs)", "step_fs"),
                            ("std E (kJ/mol)", "fluctuation"),
                            ("drift (kJ/mol/ns)", lambda r: "%+.2g +- %.1g" % (r["drift_per_ns"], r["drift_error_per_ns"])
@@ -107,31 +96,15 @@ def accuracy_section(iso, rows, order_rows, planar, ccma, quick):
     md.append(table(order_rows, [("system", "system"), ("method", "method"), ("order", "order")], {"order": "%.2f"}))
     md.append("![energy vs step](results/accuracy_energy_vs_step.png)\n")
     md.append("### Planar benzene under OpenMM's distance constraints\n")
-    md.append("The 27-benzene cluster with each molecule held by distance constraints instead (Reference platform, "
-              "1 fs, constraint tolerance 1e-8). Rigidity: the largest change of any intra-molecular pair distance, "
-              "constrained or not.\n")
     md.append(table(planar, [("constraints per molecule", "constraints"), ("method", "method"),
                              ("steps run", "steps_run"), ("rigidity (nm)", "rigidity_nm"),
                              ("energy change (kJ/mol)", "energy_change"), ("wall (s)", "wall_s"), ("failure", "failure")],
                     {"rigidity (nm)": "%.2e", "energy change (kJ/mol)": "%+.3e", "wall (s)": "%.1f"}))
-    md.append("### OpenMM's CCMA on a non-planar 5-site molecule\n")
-    md.append("Even for a non-planar molecule, which distance constraints are declared matters to OpenMM: one "
-              "molecule, random velocities projected by `Context.applyVelocityConstraints` (CCMA, tolerance 1e-8) "
-              "with 9 of its 10 pair distances (or all 10), against the exact projection (M-RATTLE's). "
-              "The non-planar runs above declare the first set that converges (pair 0-1 omitted).\n")
-    md.append(table(ccma, [(k, k) for k in ccma[0].keys()], {"CCMA kinetic energy": "%.6g", "exact": "%.6g"}))
     return md
 
 
 def reversibility_section(rows, step_counts):
     md = ["### Time reversibility\n"]
-    md.append("Every method here is time-reversible in exact arithmetic. Each run starts on the constraint "
-              "surface, takes n steps of 2 fs on the Reference platform (double precision), reverses the "
-              "velocities and takes n more; the table gives the largest distance of any atom from where it "
-              "started. OpenMM's VerletIntegrator is leapfrog (it stores v(t - dt/2)), so its reversed run starts "
-              "from -v(t + dt/2). After 10 steps the error is the method's own; after 1000 steps (4 ps in all) "
-              "the clusters' chaotic dynamics has amplified whatever was left at each step, so compare methods "
-              "within a system, not across lengths.\n")
     md.append(table(rows, [("system", "system"), ("method", "method")] +
                     [("after %d steps (nm)" % n, "error_after_%d" % n) for n in step_counts],
                     {"after %d steps (nm)" % n: "%.2e" for n in step_counts}))
@@ -139,25 +112,15 @@ def reversibility_section(rows, step_counts):
         first = "error_after_%d" % step_counts[0]
         rigid = [r[first] for r in rows if r["method"] in ("M-RATTLE", "splitting")]
         constrained = [r[first] for r in rows if r["method"] not in ("M-RATTLE", "splitting")]
-        md.append("After %d steps M-RATTLE and the splitting method are back within %.1e nm (round-off; the "
-                  "splitting method takes a symmetric top's degenerate principal axes from the body's own atoms, "
-                  "so benzene is reversible too); OpenMM's RATTLE and CCMA within %.1e to %.1e nm, set by their "
-                  "constraint tolerance, which the chaotic dynamics then amplifies like any other error.\n" % (
+        md.append("After %d steps M-RATTLE and the splitting method are back within %.1e nm (round-off); OpenMM's "
+                  "RATTLE and CCMA within %.1e to %.1e nm, set by their constraint tolerance.\n" % (
                       step_counts[0], max(rigid), min(constrained), max(constrained)))
     return md
 
 
 def cost_section(timings, ratios, paper_rows):
-    md = ["\n## Cost per step, forces excluded\n"]
-    md.append("From `benchmarks/python/suite/cost.py` (docs/benchmarks.md): N rigid bodies of k atoms whose only "
-              "force is a zero-strength external force, velocities at 300 K; median time per step of interleaved "
-              "batches (CPU platform with one thread unless `threads` says 2). `verlet` is OpenMM's "
-              "VerletIntegrator with no constraints (the floor), `verlet_settle` the same with each 3-atom body's "
-              "3 distances constrained (a rigid water: OpenMM's SETTLE), `verlet_ccma` with 9 distance constraints "
-              "per 5-atom body (OpenMM's CCMA, given the angles it needs), `mrattle_allpairs` M-RATTLE with all 10 "
-              "pair constraints declared inside each body.\n")
-    md.append("Every ratio, against its target where it has one (`met` is `-` where it has none; the reasons for "
-              "the targets missed: docs/benchmarks.md):\n")
+    md = ["\n## Cost per step, forces excluded\n", method("Cost per step")]
+    md.append("Every ratio, against its target where it has one (`met` is `-` where it has none):\n")
     md.append(table(ratios, [(k, k) for k in ratios[0].keys()]) if ratios else "(no ratios)\n")
     md.append("All timings (microseconds per step):\n")
     keep = [k for k in timings[0].keys() if k in ("platform", "integrator", "threads", "atoms_per_body", "bodies",
@@ -166,44 +129,20 @@ def cost_section(timings, ratios, paper_rows):
     md.append("![cost](results/cost_step_times.png)\n")
     if paper_rows:
         md.append("### The paper's systems, forces included\n")
-        md.append("One rigid benzene and the 27-benzene cluster (the models' Lennard-Jones and Coulomb sites, no "
-                  "cutoff), 2 fs, median of interleaved batches (CPU platform with one thread). On these systems the "
-                  "integrator's own cost is small beside OpenMM's fixed per-step work (one benzene) or the "
-                  "all-pairs forces (the cluster), so the two methods cost about the same per step; the "
-                  "differences between the methods are in the sections above and below, not here.\n")
         md.append(table(paper_rows, [("system", "system"), ("platform", "platform"), ("method", "method"),
                                      ("us per step", "us_per_step")], {"us per step": "%.1f"}))
     return md
 
 
 def sampling_section(rows, runs, per_run, eq, step, quick):
-    md = ["\n## Sampling\n"]
-    md.append("For each method, %d independent NVE runs of the 27-benzene cluster (lattice start at 200 K with "
-              "different orientations and velocities per seed, the same seeds for both methods; %g fs steps, CPU "
-              "platform), %g ps each with the first %g ps dropped, a frame every 100 fs. Each run's series is "
-              "thinned to roughly independent samples (every g-th frame, g its statistical inefficiency) and the "
-              "runs are pooled; Kolmogorov-Smirnov two-sample tests compare the methods (p > 0.05: no detectable "
-              "difference). Temperature: 2 KE / (6N k_B), the count `getNumDegreesOfFreedom()` reports; an isolated "
-              "cluster also conserves its total momentum P and angular momentum L, which leave 6N - 6 degrees of "
-              "freedom, so this temperature reads 6/(6N) = %.1f%% below the equipartition temperature. "
-              "Equipartition: P = 0 takes 3 degrees of freedom from translation and L = 0 takes 3 more, mostly "
-              "from translation too (a global rotation of a cluster is mostly orbital motion), so the mean "
-              "rotational kinetic energy per molecule exceeds the translational; the target ratio is computed "
-              "frame by frame from the cluster's inertia (`sampling.equipartition_target`).\n" % (
-                  runs, step, per_run, eq, 100.0 / 27))
+    md = ["\n## Sampling\n", method("Sampling", "%d runs per method of %g ps at %g fs, the first %g ps dropped." % (
+        runs, per_run, step, eq))]
     md.append(table(rows, [("quantity", "quantity"), ("M-RATTLE mean", "M-RATTLE mean"),
                            ("splitting mean", "splitting mean"),
                            ("spread of run means", lambda r: r.get("spread of run means", "")),
                            ("KS D", "KS D"), ("KS p", "KS p"), ("independent samples", "independent samples")],
                     {"M-RATTLE mean": "%.4g", "splitting mean": "%.4g", "spread of run means": "%.3g",
                      "KS D": "%.3f", "KS p": "%.3f"}))
-    md.append("Means are over all frames after equilibration (kelvin for temperature, kJ/mol per molecule for "
-              "kinetic energies). Caveat: a small cluster in vacuum can lose a molecule, and runs started from "
-              "different seeds settle at different temperatures; frames are decorrelated within a run but runs "
-              "differ from each other, so pooled KS p-values overstate significance for slowly varying quantities "
-              "(the C-C shell fraction most of all): compare the difference between the methods' means with the "
-              "spread of the per-run means (standard deviation over all runs of both methods). A difference "
-              "smaller than that spread is not evidence that the methods sample differently.\n")
     md += sampling_verdict(rows, runs)
     md.append("![sampling](results/sampling_histograms.png)\n")
     return md
@@ -234,22 +173,10 @@ def sampling_verdict(rows, runs_per_method):
 def long_drift_section(rows, temperature, equilibrate_ps, sample_ps, radius):
     """Long NVE runs from equilibrated starts: drift with standard error per run, and what they show."""
     from suite import long_drift
-    md = ["\n## Long-run energy drift\n"]
     lengths = ", ".join("%g ps at %g fs" % (length, step) for step, length in sorted(
         {(r["step_fs"], round(r["length_ps"], 1)) for r in rows}, reverse=True))
-    md.append("The 27-benzene cluster in vacuum (CPU platform, one thread). Each start (seed) is the model's lattice "
-              "at %g K with that seed's orientations and velocities, equilibrated for %g ps with M-RATTLE and an "
-              "Andersen thermostat at %g K (5/ps, its random numbers seeded by the same seed; 200 steps of 1 fs, "
-              "then 4 fs; `long_drift.equilibrated_start`) and then discarded; the thermostat's net momentum and angular momentum are removed from the "
-              "final velocities. From that one state each method runs NVE (%s; energy sampled every %g ps). "
-              "Drift: least-squares slope of the total energy with its standard error, inflated by the residuals' "
-              "autocorrelation (`stats.drift_with_error`); verdict: whether the slope is more than two standard "
-              "errors from zero. std E: standard deviation of the total energy over the run. T: mean kinetic "
-              "temperature over the run, 2 KE / (6N k_B). Departed: molecules whose centre is more than %g nm from "
-              "the centre of the remaining molecules at the end of the run (recomputed without the departed ones); "
-              "farthest: the largest such distance among those that remain. Rigidity: the largest change of any "
-              "intra-molecular distance.\n" % (
-                  temperature, equilibrate_ps, temperature, lengths, sample_ps, radius))
+    md = ["\n## Long-run energy drift\n", method("Long-run energy drift", "Starts equilibrated %g ps at %g K; NVE %s, energy every %g ps; departed: "
+                     "beyond %g nm." % (equilibrate_ps, temperature, lengths, sample_ps, radius))]
     ordered = sorted(rows, key=lambda r: (-r["step_fs"], r["seed"], r["method"]))
     md.append(table(ordered, [("step (fs)", "step_fs"), ("seed", "seed"), ("method", "method"),
                               ("length (ps)", "length_ps"), ("T (K)", "temperature_K"),
@@ -261,13 +188,11 @@ def long_drift_section(rows, temperature, equilibrate_ps, sample_ps, radius):
                     {"step (fs)": "%g", "length (ps)": "%.1f", "T (K)": "%.1f", "std E (kJ/mol)": "%.3g", "farthest (nm)": "%.2f",
                      "rigidity (nm)": "%.1e", "wall (s)": "%.0f"}))
     md.append("![E(t) - E(0)](results/long_drift.png)\n")
-    lines = []
-    for s in long_drift.summary(rows):
-        spread = (", spread (standard deviation) over runs %.4f" % s["spread"]) if math.isfinite(s["spread"]) else ""
-        lines.append("- %g fs, %s: %d run%s, mean drift %+.4f kJ/mol/ns%s; %d of %d consistent with zero within 2 SE; "
-                     "largest |drift| + 2 SE %.4f kJ/mol/ns.\n" % (
-                         s["step_fs"], s["method"], s["runs"], "" if s["runs"] == 1 else "s", s["mean_drift"], spread,
-                         s["zero_within_2se"], s["runs"], s["bound"]))
+    lines = ["- %g fs, %s: %d run%s, mean drift %+.4f kJ/mol/ns%s; %d of %d consistent with zero within 2 SE; largest "
+             "|drift| + 2 SE %.4f kJ/mol/ns.\n" % (
+                 s["step_fs"], s["method"], s["runs"], "" if s["runs"] == 1 else "s", s["mean_drift"],
+                 (", spread (standard deviation) over runs %.4f" % s["spread"]) if math.isfinite(s["spread"]) else "",
+                 s["zero_within_2se"], s["runs"], s["bound"]) for s in long_drift.summary(rows)]
     if lines:
         md.append("Per step size and method:\n\n" + "".join(lines))
     md += long_drift_reading(rows)
@@ -277,12 +202,10 @@ def long_drift_section(rows, temperature, equilibrate_ps, sample_ps, radius):
 def long_drift_reading(rows, claim=0.03):
     """What the long runs show and cannot show, worded from their numbers."""
     from suite import long_drift
-    md = []
     finite = [r for r in rows if math.isfinite(r["drift_per_ns"]) and math.isfinite(r["drift_error_per_ns"])]
     if not finite:
         return ["No run gave a drift fit.\n"]
-    def name(r):
-        return "%s %g fs seed %d" % (r["method"], r["step_fs"], r["seed"])
+    name = lambda r: "%s %g fs seed %d" % (r["method"], r["step_fs"], r["seed"])  # noqa: E731
     zero = [r for r in finite if long_drift.within_se(r["drift_per_ns"], r["drift_error_per_ns"])]
     beyond = [r for r in finite if r not in zero]
     text = "\n%d of %d runs have a drift consistent with zero within 2 standard errors" % (len(zero), len(finite))
@@ -329,11 +252,4 @@ def long_drift_reading(rows, claim=0.03):
     text += ("%s. " % ("No molecule left the cluster in any run" if gone == 0 else
                        "Molecules left the cluster in %d of %d runs (%d in all)" % (
                            sum(1 for r in rows if r["departed"]), len(rows), gone)))
-    text += ("Limits: the exact dynamics conserves the total energy whatever the cluster does, so a drift is the "
-             "integrator's error even while the cluster relaxes or loses a molecule, but that error grows with the "
-             "temperature and the forces met, so these numbers belong to this cluster at this temperature and "
-             "these steps, not to every system. The two methods' runs from one start share that start, so they "
-             "say nothing about how the drift varies between starts; the runs from different seeds do, and they "
-             "are few.\n")
-    md.append(text)
-    return md
+    return [text.rstrip() + "\n"]

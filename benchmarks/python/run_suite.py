@@ -4,7 +4,7 @@
     paper                   M-RATTLE against the splitting method: accuracy, cost, sampling, drift
     validate-langevin       MRattleLangevinIntegrator against LangevinMiddle + SETTLE
     validate-equipartition  rigid water, translational against rotational temperature
-    validate-thermostats    Nose-Hoover chain and CSVR on rigid water [--study step-sizes|density|equipartition]
+    validate-thermostats    Nose-Hoover chain and CSVR on rigid water [--study step-sizes|density]
     validate-minimization, validate-minimization-starts   studies with options of their own
 
 --quick: tiny runs written to a scratch folder (a smoke test); --only: some parts of a target.
@@ -32,8 +32,8 @@ def parse(argv):
     p.add_argument("--out", default=None, help="output folder (default docs/, or a scratch folder with --quick)")
     p.add_argument("--only", help="comma-separated parts of the target to run")
     thermostats = p.add_argument_group("validate-thermostats")
-    thermostats.add_argument("--study", choices=("step-sizes", "density", "equipartition"),
-                             help="a follow-up study instead of the main runs (its CSV only; equipartition: its rows)")
+    thermostats.add_argument("--study", choices=("step-sizes", "density"),
+                             help="a follow-up study instead of the main runs (its CSV only)")
     thermostats.add_argument("--report-from", help="report a finished run from its CSV instead of running")
     thermostats.add_argument("--threads", type=int, default=1, help="CPU platform threads")
     return p.parse_args(argv)
@@ -68,75 +68,56 @@ def main(argv=None):
     q = args.quick
     md = report.header(q)
 
-    if "cost" in parts:
-        # First, while the machine is quietest: timings.
-        log("cost: the integrators' own cost per step, forces excluded")
-        timings, ratios = cost.run(["Reference", "CPU"], [100, 1000, 3000] if not q else [50],
-                                   [3, 5, 12, 30] if not q else [3, 5], 7 if not q else 2, 0.1 if not q else 0.01, log,
-                                   threads=[1, 2])
-        write_csv(os.path.join(rows_dir, "cost_step_times.csv"), timings)
-        write_csv(os.path.join(rows_dir, "cost_ratios.csv"), ratios)
+    def rows(name, data):  # a part's rows, as a CSV
+        write_csv(os.path.join(rows_dir, name + ".csv"), data)
+        return data
+
+    if "cost" in parts:  # first, while the machine is quietest
+        log("cost: the integrators' own cost per step (forces excluded), then the paper's systems (forces included)")
+        timings, ratios = cost.run(["Reference", "CPU"], [50] if q else [100, 1000, 3000], [3, 5] if q else [3, 5, 12, 30],
+                                   2 if q else 7, 0.01 if q else 0.1, log, threads=[1, 2])
+        rows("cost_step_times", timings), rows("cost_ratios", ratios)
         cost.plot(timings, os.path.join(results_dir, "cost_step_times.png"))
-        log("cost: the paper's systems (one benzene, the 27-benzene cluster), forces included")
-        prows = cost.paper_systems(["Reference", "CPU"], 7 if not q else 1, 0.2 if not q else 0.01, log)
-        write_csv(os.path.join(rows_dir, "cost_paper_systems.csv"), prows)
+        prows = rows("cost_paper_systems", cost.paper_systems(["Reference", "CPU"], 1 if q else 7, 0.01 if q else 0.2, log))
         md += report.cost_section(timings, ratios, prows)
 
     if "accuracy" in parts:
-        log("accuracy: isolated benzene")
-        steps = [0.5, 1, 2, 4, 8]
-        iso = accuracy.isolated_benzene(steps if not q else [1, 2], 2.048 if not q else 0.064, log)
-        write_csv(os.path.join(rows_dir, "accuracy_isolated_benzene.csv"), iso)
+        log("accuracy: isolated benzene, the 27-benzene and 5-site clusters, planar benzene, reversibility")
+        steps = [1, 2] if q else [0.5, 1, 2, 4, 8]
+        iso = rows("accuracy_isolated_benzene", accuracy.isolated_benzene(steps, 0.064 if q else 2.048, log))
         accuracy.plot_isolated(iso, os.path.join(results_dir, "accuracy_isolated_benzene.png"))
-
-        log("accuracy: 27-benzene cluster")
-        csys, x, v, bodies = accuracy.cluster_start()
-        rows = accuracy.energy_vs_step("27-benzene cluster", csys, x, v, bodies, ["M-RATTLE", "splitting"],
-                                       steps if not q else [1, 2], 4.096 if not q else 0.1, log)
-        log("accuracy: non-planar 5-site cluster (OpenMM's RATTLE and CCMA too)")
-        tsys, tx, tv, tbodies = accuracy.tetrahedral_start()
+        energy = accuracy.energy_vs_step("27-benzene cluster", *accuracy.cluster_start(), ["M-RATTLE", "splitting"],
+                                         steps, 0.1 if q else 4.096, log)
         # Reference platform: OpenMM 7.7's CPU platform turns this constrained system's
         # coordinates to NaN on the first Verlet step, which Reference does not.
-        rows += accuracy.energy_vs_step("27 tetrahedral 5-site", tsys, tx, tv, tbodies,
-                                        ["M-RATTLE", "splitting", "RATTLE (CustomIntegrator)", "Verlet + CCMA"],
-                                        steps if not q else [1, 2], 4.0 if not q else 0.1, log, platform="Reference")
-        write_csv(os.path.join(rows_dir, "accuracy_energy_vs_step.csv"), rows)
-        accuracy.plot(rows, os.path.join(results_dir, "accuracy_energy_vs_step.png"), "Energy fluctuation against step size")
-        order_rows = accuracy.orders(rows)
-        log("accuracy: planar benzene under OpenMM's distance constraints")
-        planar = accuracy.planar_benzene_with_constraints(0.5 if not q else 0.05, log)
-        write_csv(os.path.join(rows_dir, "accuracy_planar_constraints.csv"), planar)
-        log("accuracy: which 9-constraint sets OpenMM's CCMA converges on")
-        ccma = accuracy.ccma_subsets(log)
-        write_csv(os.path.join(rows_dir, "accuracy_ccma_subsets.csv"), ccma)
-        log("accuracy: time reversibility (forward, reverse the velocities, back)")
-        rev_steps = [10, 1000] if not q else [10, 50]
-        rev = accuracy.reversibility(rev_steps, 2.0, log)
-        write_csv(os.path.join(rows_dir, "accuracy_reversibility.csv"), rev)
-        md += report.accuracy_section(iso, rows, order_rows, planar, ccma, q)
+        energy += accuracy.energy_vs_step("27 tetrahedral 5-site", *accuracy.tetrahedral_start(),
+                                          ["M-RATTLE", "splitting", "RATTLE (CustomIntegrator)", "Verlet + CCMA"],
+                                          steps, 0.1 if q else 4.0, log, platform="Reference")
+        rows("accuracy_energy_vs_step", energy)
+        accuracy.plot(energy, os.path.join(results_dir, "accuracy_energy_vs_step.png"), "Energy fluctuation against step size")
+        planar = rows("accuracy_planar_constraints", accuracy.planar_benzene_with_constraints(0.05 if q else 0.5, log))
+        rev_steps = [10, 50] if q else [10, 1000]
+        rev = rows("accuracy_reversibility", accuracy.reversibility(rev_steps, 2.0, log))
+        md += report.accuracy_section(iso, energy, accuracy.orders(energy), planar, q)
         md += report.reversibility_section(rev, rev_steps)
 
     if "sampling" in parts:
         log("sampling: independent NVE runs of the cluster, both methods")
-        seeds = [11, 12, 13, 14, 15, 16] if not q else [11, 12]
-        per_run, eq, step = (24.0, 4.0, 4.0) if not q else (0.8, 0.2, 4.0)
+        seeds = [11, 12] if q else [11, 12, 13, 14, 15, 16]
+        per_run, eq, step = (0.8, 0.2, 4.0) if q else (24.0, 4.0, 4.0)
         res = {m: sampling.run_many(m, seeds, per_run, eq, step, 200.0, log) for m in ("M-RATTLE", "splitting")}
-        srows = sampling.compare(res)
-        write_csv(os.path.join(rows_dir, "sampling_comparison.csv"), srows)
         sampling.plot(res, os.path.join(results_dir, "sampling_histograms.png"))
-        md += report.sampling_section(srows, len(seeds), per_run, eq, step, q)
+        md += report.sampling_section(rows("sampling_comparison", sampling.compare(res)), len(seeds), per_run, eq, step, q)
 
     if "drift" in parts:
         log("drift: long NVE of the 27-benzene cluster from equilibrated starts, both methods")
         # {step (fs): (ps per run, seeds)}: 200 ps at 4 fs from two starts, 100 ps at 2 fs from one
         # (a 2 fs run costs twice as much; the whole part takes about 11 minutes on 2 cores).
-        dplan, deq, dsample, dradius, dtemp = ({4.0: (200.0, [1, 2]), 2.0: (100.0, [1])}, 100.0, 0.1, 2.0, 200.0) \
-            if not q else ({4.0: (0.4, [1])}, 0.4, 0.02, 2.0, 200.0)
-        drows = long_drift.run(dtemp, dplan, deq, dsample, dradius, log)
-        write_csv(os.path.join(rows_dir, "long_drift.csv"),
-                  [{k: v for k, v in r.items() if not k.startswith("series_")} for r in drows])
+        dplan, deq, dsample = ({4.0: (0.4, [1])}, 0.4, 0.02) if q else ({4.0: (200.0, [1, 2]), 2.0: (100.0, [1])}, 100.0, 0.1)
+        drows = long_drift.run(200.0, dplan, deq, dsample, 2.0, log)
+        rows("long_drift", [{k: v for k, v in r.items() if not k.startswith("series_")} for r in drows])
         long_drift.plot(drows, os.path.join(results_dir, "long_drift.png"))
-        md += report.long_drift_section(drows, dtemp, deq, dsample, dradius)
+        md += report.long_drift_section(drows, 200.0, deq, dsample, 2.0)
 
     if "langevin" in parts:
         log("langevin: validation against LangevinMiddle + SETTLE (water NVT, NPT; liquid benzene)")
@@ -151,7 +132,7 @@ def main(argv=None):
         log("thermostats: Nose-Hoover chain and CSVR on rigid TIP3P water (canonical sampling, drift, diffusion)")
         from suite import thermostats
         md += thermostats.validate(args, q, os.path.join(results_dir, "thermostats"), log)
-        if args.study in ("step-sizes", "density"):
+        if args.study:
             return  # their CSV only: the section is reported from the main run's CSV with --report-from
 
     path = os.path.join(out, "results.md")

@@ -25,10 +25,8 @@ def _angular_momentum(system, state=None, x=None, v=None):
 
 
 def benzene_start():
-    """One free benzene with rigid-body velocities at 300 K: (system, positions, velocities, bodies).
-
-    This and the two below build, afresh on each call, the starting points that the energy runs
-    and the reversibility test share."""
+    """One free benzene with rigid-body velocities at 300 K: (system, positions, velocities, bodies); this and the
+    two below build afresh the starts that the energy runs and the reversibility test share."""
     model = mrattle.models.benzene()
     x = _positions(model)
     bodies = _bodies(model)
@@ -64,14 +62,12 @@ def isolated_benzene(steps_fs, total_ps, log):
             state = run["context"].getState(getPositions=True, getVelocities=True)
             L = _angular_momentum(system, state)
             e = run["total"]
-            rows.append({
-                "system": "isolated benzene", "method": method, "step_fs": h,
-                "energy_rel_error": float(np.max(np.abs(e - e[0])) / abs(e[0])),
-                "angmom_rel_error": float(np.linalg.norm(L - L0) / np.linalg.norm(L0)),
-                "position_error_nm": float(np.max(np.linalg.norm(
-                    state.getPositions(asNumpy=True).value_in_unit(unit.nanometer) - ref_positions, axis=1))),
-                "rigidity_nm": float(run["rigidity"].max()),
-            })
+            rows.append({"system": "isolated benzene", "method": method, "step_fs": h,
+                         "energy_rel_error": float(np.max(np.abs(e - e[0])) / abs(e[0])),
+                         "angmom_rel_error": float(np.linalg.norm(L - L0) / np.linalg.norm(L0)),
+                         "position_error_nm": float(np.max(np.linalg.norm(
+                             state.getPositions(asNumpy=True).value_in_unit(unit.nanometer) - ref_positions, axis=1))),
+                         "rigidity_nm": float(run["rigidity"].max())})
             log("  isolated benzene %-9s h=%4.1f fs  |dE|/E=%.2e  |dL|/L=%.2e  x err=%.2e nm" % (
                 method, h, rows[-1]["energy_rel_error"], rows[-1]["angmom_rel_error"], rows[-1]["position_error_nm"]))
     return rows
@@ -87,14 +83,11 @@ def energy_vs_step(label, system, positions, velocities, bodies, methods, steps_
             e = run["total"]
             ok = run["failure"] is None and len(e) > 2
             drift, drift_error = stats.drift_with_error(run["time"], e) if ok else (float("nan"), float("nan"))
-            rows.append({
-                "system": label, "method": method, "step_fs": h,
-                "fluctuation": float(np.std(e)) if ok else float("nan"),
-                "drift_per_ns": drift, "drift_error_per_ns": drift_error,
-                "rigidity_nm": float(run["rigidity"].max()) if run["rigidity"].size else float("nan"),
-                "failure": run["failure"] or "",
-                "dof": run["dof"],
-            })
+            rows.append({"system": label, "method": method, "step_fs": h,
+                         "fluctuation": float(np.std(e)) if ok else float("nan"),
+                         "drift_per_ns": drift, "drift_error_per_ns": drift_error,
+                         "rigidity_nm": float(run["rigidity"].max()) if run["rigidity"].size else float("nan"),
+                         "failure": run["failure"] or "", "dof": run["dof"]})
             log("  %-22s %-26s h=%4.1f fs  std(E)=%.3e  drift=%+.3e kJ/mol/ns  rigid=%.1e  %s" % (
                 label, method, h, rows[-1]["fluctuation"], rows[-1]["drift_per_ns"], rows[-1]["rigidity_nm"],
                 rows[-1]["failure"]))
@@ -118,12 +111,8 @@ def orders(rows):
 
 
 def planar_benzene_with_constraints(total_ps, log):
-    """What OpenMM's constraint algorithms do with benzene held by distance constraints.
-
-    Two constraint sets per molecule: the 30 bond and angle distances (3N-6, enough for a
-    non-planar molecule, but planar benzene can flex out of plane without changing any of
-    them) and all 66 pair distances (redundant). Compared with M-RATTLE on the same start.
-    """
+    """OpenMM's constraint algorithms on the cluster's benzenes held by their 30 bond and angle distances (3N-6,
+    enough for a non-planar molecule, not for planar benzene) or all 66 (redundant), beside M-RATTLE."""
     model = mrattle.models.benzeneCluster(temperature=250 * unit.kelvin, seed=2)
     x0 = _positions(model)
     v0 = np.array(model.velocities.value_in_unit(unit.nanometer / unit.picosecond))
@@ -143,12 +132,10 @@ def planar_benzene_with_constraints(total_ps, log):
             run = common.nve_run(system, x0, v0, method, 1.0 * common.FS, total_ps, 0.01, "Reference", bodies,
                                  tolerance=1e-8)
             e = run["total"]
-            rows.append({
-                "constraints": name, "method": method, "steps_run": run["steps"],
-                "rigidity_nm": float(run["rigidity"].max()) if run["rigidity"].size else float("nan"),
-                "energy_change": float(e[-1] - e[0]) if len(e) > 1 else float("nan"),
-                "wall_s": run["wall"], "failure": run["failure"] or "",
-            })
+            rows.append({"constraints": name, "method": method, "steps_run": run["steps"],
+                         "rigidity_nm": float(run["rigidity"].max()) if run["rigidity"].size else float("nan"),
+                         "energy_change": float(e[-1] - e[0]) if len(e) > 1 else float("nan"),
+                         "wall_s": run["wall"], "failure": run["failure"] or ""})
             log("  planar benzene, %-24s %-26s steps=%d rigid=%.2e dE=%.3e %s" % (
                 name, method, rows[-1]["steps_run"], rows[-1]["rigidity_nm"], rows[-1]["energy_change"],
                 rows[-1]["failure"]))
@@ -156,10 +143,9 @@ def planar_benzene_with_constraints(total_ps, log):
 
 
 def plot(rows, path, title):
-    plt = common.pyplot()
     systems = sorted({r["system"] for r in rows})
-    fig, axes = plt.subplots(1, len(systems), figsize=(5.2 * len(systems), 4.2), squeeze=False)
-    for ax, system in zip(axes[0], systems):
+    fig, axes = common.panels(len(systems))
+    for ax, system in zip(axes, systems):
         for method in sorted({r["method"] for r in rows if r["system"] == system}):
             pts = sorted((r["step_fs"], r["fluctuation"]) for r in rows
                          if r["system"] == system and r["method"] == method and math.isfinite(r["fluctuation"]))
@@ -174,13 +160,11 @@ def plot(rows, path, title):
         ax.set_ylabel("std of total energy (kJ/mol)")
         ax.set_title(system)
         ax.legend(fontsize=8)
-    fig.suptitle(title)
-    common.save_figure(fig, path)
+    common.save_figure(fig, path, title)
 
 
 def plot_isolated(rows, path):
-    plt = common.pyplot()
-    fig, axes = plt.subplots(1, 2, figsize=(10, 4))
+    fig, axes = common.panels(2, 5, 4)
     for method in ("M-RATTLE", "splitting"):
         pts = sorted((r["step_fs"], r["energy_rel_error"], r["position_error_nm"]) for r in rows if r["method"] == method)
         axes[0].loglog([p[0] for p in pts], [max(p[1], 1e-17) for p in pts], "o-", label=method)
@@ -190,59 +174,12 @@ def plot_isolated(rows, path):
     for ax in axes:
         ax.set_xlabel("step size (fs)")
         ax.legend()
-    fig.suptitle("Isolated rigid benzene (free rotor)")
-    common.save_figure(fig, path)
-
-
-def ccma_subsets(log):
-    """OpenMM's CCMA on one 5-site molecule held by 9 of its 10 pair distances (and all 10).
-
-    Random (non-rigid) velocities are projected with Context.applyVelocityConstraints on
-    the Reference platform; the exact projection (M-RATTLE's) keeps the rigid part, so the
-    kinetic energies must agree.
-    """
-    sites, masses = common.tetrahedral_sites()
-    pairs = [(i, j) for i in range(5) for j in range(i + 1, 5)]
-    velocities = np.random.default_rng(0).normal(size=(5, 3))
-    exact = _projected_kinetic_energy(sites, masses, velocities, [], "M-RATTLE")
-    rows = []
-    for omitted in pairs + [None]:
-        kept = [p for p in pairs if p != omitted]
-        ke = _projected_kinetic_energy(sites, masses, velocities, kept, "CCMA")
-        rows.append({"omitted pair": "%d-%d" % omitted if omitted else "none (all 10)",
-                     "CCMA kinetic energy": ke, "exact": exact,
-                     "converged": bool(np.isfinite(ke) and abs(ke - exact) < 1e-6 * exact)})
-        log("  CCMA, omitted %-14s KE %.6g (exact %.6g)" % (rows[-1]["omitted pair"], ke, exact))
-    return rows
-
-
-def _projected_kinetic_energy(sites, masses, velocities, pairs, how):
-    system = openmm.System()
-    for m in masses:
-        system.addParticle(m)
-    for i, j in pairs:
-        system.addConstraint(i, j, float(np.linalg.norm(sites[i] - sites[j])))
-    if how == "M-RATTLE":
-        integrator = mrattle.MRattleIntegrator(0.001)
-        integrator.addRigidBody(list(range(len(masses))))
-    else:
-        integrator = openmm.VerletIntegrator(0.001)
-    context = common.context(system, integrator, sites, velocities, "Reference")
-    if how != "M-RATTLE":
-        try:
-            context.applyVelocityConstraints(1e-8)
-        except Exception:
-            return float("nan")
-    v = context.getState(getVelocities=True).getVelocities(asNumpy=True).value_in_unit(unit.nanometer / unit.picosecond)
-    return float(0.5 * (masses[:, None] * v ** 2).sum())
+    common.save_figure(fig, path, "Isolated rigid benzene (free rotor)")
 
 
 def _forward_and_back(system, positions, velocities, method, step_ps, steps, bodies, tolerance=1e-10):
-    """Run `steps` steps, reverse the velocities, run `steps` more: how far from the start it ends.
-
-    Reference platform (double precision, deterministic), so what is left is the method's own
-    irreversibility plus round-off (and, for CCMA, its constraint tolerance).
-    """
+    """Run `steps` steps, reverse the velocities, run `steps` more (Reference platform): how far from the start it
+    ends, the method's own irreversibility plus round-off (and a constrained method's tolerance)."""
     integrator = common.make_integrator(method, step_ps, tolerance, bodies)
     context = common.context(system, integrator, positions, velocities, "Reference")
     context.applyConstraints(tolerance)  # start exactly on the constraint surface for every method

@@ -16,17 +16,11 @@ KB = 0.00831446261815324  # kJ/mol/K
 TEMPERATURE = 300.0  # K, the water studies'
 
 
-def platform(name, threads=None):
-    """An OpenMM platform and its properties (CPU: fixed thread count for reproducible timings)."""
-    properties = {}
-    if name == "CPU" and threads is not None:
-        properties["Threads"] = str(threads)
-    return openmm.Platform.getPlatformByName(name), properties
-
-
 def context(system, integrator, positions, velocities=None, platform_name="CPU", threads=None):
-    """A Context at `positions` with `velocities`: an array, or (temperature, seed) for thermal ones."""
-    c = openmm.Context(system, integrator, *platform(platform_name, threads))
+    """A Context at `positions` with `velocities`: an array, or (temperature, seed) for thermal ones; on CPU,
+    `threads` threads (a fixed count for reproducible timings)."""
+    c = openmm.Context(system, integrator, openmm.Platform.getPlatformByName(platform_name),
+                       {"Threads": str(threads)} if platform_name == "CPU" and threads is not None else {})
     c.setPositions(positions)
     if isinstance(velocities, tuple):
         c.setVelocitiesToTemperature(*velocities)
@@ -53,30 +47,21 @@ def make_integrator(method, step_ps, tolerance=1e-10, bodies=None):
 
 def intra_distances(positions, bodies):
     """All intra-body pair distances, concatenated (for rigidity checks)."""
-    out = []
-    for body in bodies:
-        p = positions[body]
-        d = p[:, None, :] - p[None, :, :]
-        iu = np.triu_indices(len(body), 1)
-        out.append(np.sqrt((d ** 2).sum(-1))[iu])
-    return np.concatenate(out) if out else np.zeros(0)
+    return np.concatenate([np.linalg.norm(positions[b][:, None] - positions[b], axis=2)[np.triu_indices(len(b), 1)]
+                           for b in bodies] or [np.zeros(0)])
 
 
 def nve_run(system, positions, velocities, method, step_ps, total_ps, sample_ps, platform_name="CPU",
-            bodies=None, threads=1, tolerance=1e-10, progress=None):
-    """Run NVE and sample total energy; returns a dict of arrays and the wall time.
-
-    Raises nothing on a blow-up: a non-finite energy or an OpenMM exception ends the run
-    and is reported in 'failure'.
-    """
+            bodies=None, threads=1, tolerance=1e-10):
+    """Run NVE and sample the energies (and rigidity): a dict of arrays, the wall time, the Context; a blow-up (a
+    non-finite energy or an OpenMM exception) ends the run and is reported in 'failure'."""
     integrator = make_integrator(method, step_ps, tolerance, bodies)
     context_ = context(system, integrator, positions, velocities, platform_name, threads)
     stride = max(1, int(round(sample_ps / step_ps)))
     samples = max(1, int(round(total_ps / (stride * step_ps))))
     dof = mrattle.degreesOfFreedom(context_)
     times, kinetic, potential, rigidity = [], [], [], []
-    reference = None
-    failure = None
+    reference = failure = None
     start = time.perf_counter()
     for k in range(samples + 1):
         if k > 0:
@@ -100,40 +85,27 @@ def nve_run(system, positions, velocities, method, step_ps, total_ps, sample_ps,
             if reference is None:
                 reference = d
             rigidity.append(float(np.max(np.abs(d - reference))) if d.size else 0.0)
-        if progress:
-            progress(k, samples)
     wall = time.perf_counter() - start
-    kinetic = np.array(kinetic)
-    potential = np.array(potential)
-    return {
-        "time": np.array(times), "kinetic": kinetic, "potential": potential, "total": kinetic + potential,
-        "rigidity": np.array(rigidity), "dof": dof, "wall": wall, "steps": len(times) and (len(times) - 1) * stride,
-        "failure": failure, "context": context_, "integrator": integrator,
-    }
-
-
-def tetrahedral_sites():
-    """A non-planar 5-site rigid molecule (centre + 4 distorted tetrahedral sites), nm and daltons."""
-    sites = np.array([[0.0, 0.0, 0.0], [0.109, 0.0, 0.0], [-0.036, 0.103, 0.0],
-                      [-0.036, -0.051, 0.089], [-0.036, -0.052, -0.090]])
-    masses = np.array([12.011, 1.008, 14.007, 15.999, 32.06])
-    return sites - masses.dot(sites) / masses.sum(), masses
+    kinetic, potential = np.array(kinetic), np.array(potential)
+    return {"time": np.array(times), "kinetic": kinetic, "potential": potential, "total": kinetic + potential,
+            "rigidity": np.array(rigidity), "dof": dof, "wall": wall, "steps": len(times) and (len(times) - 1) * stride,
+            "failure": failure, "context": context_, "integrator": integrator}
 
 
 # All 10 pair distances of the 5-site molecule, ordered so that the first 9 (the centre-site
-# pair 0-1 left out) are a set OpenMM 7.7's CCMA converges on: leaving out 0-2, 0-3, 0-4,
-# 2-3, 2-4 or 3-4 instead makes its velocity iteration diverge (accuracy.ccma_subsets()).
+# pair 0-1 left out) are a set OpenMM 7.7's CCMA converges on (some other sets of 9 make its
+# velocity iteration diverge; the accuracy part's Verlet + CCMA rows run on this one).
 TETRAHEDRAL_PAIRS = [(0, 2), (0, 3), (0, 4), (1, 2), (1, 3), (1, 4), (2, 3), (2, 4), (3, 4), (0, 1)]
 
 
 def tetrahedral_cluster(num_per_side=3, spacing=0.55, seed=7, constraints=None):
-    """N^3 rigid tetrahedral molecules in vacuum with LJ + charges between molecules.
-
-    constraints: None, or the number of intra-molecular pair distances to declare as
-    System constraints (9 makes it rigid for OpenMM's own algorithms; 10 is all pairs).
-    Returns (system, positions, bodies).
-    """
-    sites, masses = tetrahedral_sites()
+    """N^3 rigid tetrahedral molecules in vacuum with LJ + charges between molecules, and `constraints` of their
+    pair distances as System constraints (9: rigid for OpenMM's algorithms; 10: all): (system, positions, bodies)."""
+    # A non-planar 5-site rigid molecule (centre + 4 distorted tetrahedral sites), nm and daltons.
+    sites = np.array([[0.0, 0.0, 0.0], [0.109, 0.0, 0.0], [-0.036, 0.103, 0.0],
+                      [-0.036, -0.051, 0.089], [-0.036, -0.052, -0.090]])
+    masses = np.array([12.011, 1.008, 14.007, 15.999, 32.06])
+    sites = sites - masses.dot(sites) / masses.sum()
     charges = np.array([0.2, 0.1, -0.3, -0.2, 0.2])
     lj = [(0.34, 0.36), (0.25, 0.13), (0.325, 0.71), (0.30, 0.88), (0.36, 1.05)]
     rng = np.random.default_rng(seed)
@@ -183,15 +155,11 @@ def rigid_velocities(system, positions, bodies, temperature, seed=1, box=None):
 
 def machine_description():
     """CPU model and core count, for the results page."""
-    model = "unknown CPU"
     try:
         with open("/proc/cpuinfo") as f:
-            for line in f:
-                if line.startswith("model name"):
-                    model = line.split(":", 1)[1].strip()
-                    break
-    except OSError:
-        pass
+            model = next(line.split(":", 1)[1].strip() for line in f if line.startswith("model name"))
+    except (OSError, StopIteration):
+        model = "unknown CPU"
     return "%s, %d cores visible, OpenMM %s" % (model, os.cpu_count() or 0, openmm.Platform.getOpenMMVersion())
 
 
@@ -200,17 +168,16 @@ def benzene_bodies(num_particles):
     return [list(range(12 * m, 12 * m + 12)) for m in range(num_particles // 12)]
 
 
-def interleaved_median(integrators, steps, batches):
-    """Median seconds per step of each integrator, timed in `batches` rounds that interleave them so
-    all share the machine's load. integrators: {name: integrator}; steps: {name: steps per batch}."""
-    import statistics
+def interleaved(integrators, steps, batches):
+    """Seconds per step of each integrator in `batches` rounds that interleave them, so that all share the
+    machine's load. integrators: {name: integrator}; steps: {name: steps per batch}."""
     seconds = {name: [] for name in integrators}
     for _ in range(batches):
         for name, integrator in integrators.items():
             start = time.perf_counter()
             integrator.step(steps[name])
             seconds[name].append((time.perf_counter() - start) / steps[name])
-    return {name: statistics.median(values) for name, values in seconds.items()}
+    return seconds
 
 
 def masses(system):
@@ -249,17 +216,22 @@ def read_csv(path, text=("method", "model", "failure")):
         return [{k: (v if k in text else float(v)) for k, v in r.items() if v != ""} for r in csv.DictReader(f)]
 
 
-def pyplot():
+def panels(count, width=5.2, height=4.2):
+    """A figure of `count` plots side by side (matplotlib without a display): (figure, axes)."""
     import matplotlib
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
-    return plt
+    fig, axes = plt.subplots(1, count, figsize=(width * count, height), squeeze=False)
+    return fig, axes[0]
 
 
-def save_figure(fig, path):
+def save_figure(fig, path, title=None):
+    import matplotlib.pyplot as plt
+    if title:
+        fig.suptitle(title)
     fig.tight_layout()
     fig.savefig(path, dpi=110)
-    pyplot().close(fig)
+    plt.close(fig)
 
 
 def water(pdb_name="tip3p.pdb", forcefield_name="amber14/tip3p.xml", barostat_seed=None):
@@ -334,6 +306,12 @@ def temperatures(velocities, masses, bodies, removes_cm, positions=None):
     CMMotionRemover's 3 taken from the translations), from rigid_split."""
     kt, kr = rigid_split(velocities, masses, bodies, positions)
     return 2 * kt / ((3 * len(bodies) - (3 if removes_cm else 0)) * KB), 2 * kr / (3 * len(bodies) * KB)
+
+
+def density(state, masses):
+    """g/mL, from a rectangular box."""
+    a, b, c = state.getPeriodicBoxVectors(asNumpy=True).value_in_unit(unit.nanometer)
+    return masses.sum() * 1.66053906660e-24 / (a[0] * b[1] * c[2] * 1e-21)
 
 
 def removes_cm(system):

@@ -67,6 +67,14 @@ def build(bodies, sites, masses, pairs):
     return system, len(kept)
 
 
+def batch_steps(integrator, seconds, warmup, timed):
+    """Steps that take about `seconds`: `warmup` steps, then `timed` steps timed."""
+    integrator.step(warmup)
+    start = time.perf_counter()
+    integrator.step(timed)
+    return max(1, int(seconds / max((time.perf_counter() - start) / timed, 1e-9)))
+
+
 def variants(k, names=None):
     """(integrator, constrained pairs) of each configuration timed for bodies of k atoms."""
     out = [("verlet", None), ("mrattle", None), ("splitting", None)]
@@ -87,7 +95,7 @@ def run(platforms, body_counts, atoms, repeats, batch_seconds, log, threads=(1,)
                 side = math.ceil(round(n ** (1 / 3), 9))
                 centres = 1.2 * np.array([(b % side, (b // side) % side, b // side ** 2) for b in range(n)])
                 positions = (centres[:, None, :] + sites[None, :, :]).reshape(-1, 3)
-                runs = []
+                runs = {}
                 for count, (name, pairs) in ((c, v) for c in counts for v in variants(k, names)):
                     if count != counts[0] and name not in ("verlet", "mrattle", "splitting"):
                         continue
@@ -99,30 +107,23 @@ def run(platforms, body_counts, atoms, repeats, batch_seconds, log, threads=(1,)
                         integrator = common.make_integrator("splitting" if name == "splitting" else "M-RATTLE", 0.002,
                                                             bodies=[list(range(b * k, b * k + k)) for b in range(n)])
                     context = common.context(system, integrator, positions, (300, 1), platform_name, count)
-                    integrator.step(5)  # warm up, then size the batches to batch_seconds
-                    start = time.perf_counter()
-                    integrator.step(10)
-                    steps = max(1, int(batch_seconds / max((time.perf_counter() - start) / 10, 1e-9)))
-                    runs.append(dict(name=name, threads=count, constraints=constraints, steps=steps,
-                                     integrator=integrator, context=context, seconds=[]))
-                for _ in range(repeats):
-                    for r in runs:
-                        start = time.perf_counter()
-                        r["integrator"].step(r["steps"])
-                        r["seconds"].append((time.perf_counter() - start) / r["steps"])
+                    runs[name, count] = dict(constraints=constraints, steps=batch_steps(integrator, batch_seconds, 5, 10),
+                                             integrator=integrator, context=context)
+                seconds = common.interleaved({key: r["integrator"] for key, r in runs.items()},
+                                             {key: r["steps"] for key, r in runs.items()}, repeats)
                 medians = {}
-                for r in runs:
-                    m = medians[r["name"], r["threads"]] = statistics.median(r["seconds"])
+                for (name, count), r in runs.items():
+                    m = medians[name, count] = statistics.median(seconds[name, count])
                     state = r["context"].getState(getPositions=True, getEnergy=True, groups={0})
                     finite = bool(np.isfinite(state.getPositions(asNumpy=True)._value).all()) and math.isfinite(
                         state.getKineticEnergy()._value)  # a diverged run is timed but flagged
-                    timings.append(dict(platform=platform_name, integrator=r["name"], atoms_per_body=k, bodies=n,
+                    timings.append(dict(platform=platform_name, integrator=name, atoms_per_body=k, bodies=n,
                                         atoms=n * k, constraints_per_body=r["constraints"], steps_per_batch=r["steps"],
                                         batches=repeats, median_us_per_step=m * 1e6,
-                                        min_us_per_step=min(r["seconds"]) * 1e6,
-                                        max_us_per_step=max(r["seconds"]) * 1e6,
+                                        min_us_per_step=min(seconds[name, count]) * 1e6,
+                                        max_us_per_step=max(seconds[name, count]) * 1e6,
                                         median_ns_per_atom_step=m * 1e9 / (n * k), finite="yes" if finite else "no",
-                                        threads=r["threads"]))
+                                        threads=count))
                 row = dict(platform=platform_name, atoms_per_body=k, bodies=n)
                 for label, a, b, target in TARGETS:
                     if (a, counts[0]) in medians and (b, counts[0]) in medians:
@@ -157,11 +158,8 @@ def paper_systems(platforms, batches, batch_seconds, log):
             for method in ("M-RATTLE", "splitting"):
                 runs[method] = integrator = common.make_integrator(method, 2 * common.FS, bodies=bodies)
                 contexts.append(common.context(model.system, integrator, x, v, platform_name, 1))
-                integrator.step(10)
-                start = time.perf_counter()
-                integrator.step(20)
-                steps[method] = max(1, int(batch_seconds / max((time.perf_counter() - start) / 20, 1e-9)))
-            per_step = common.interleaved_median(runs, steps, batches)
+                steps[method] = batch_steps(integrator, batch_seconds, 10, 20)
+            per_step = {m: statistics.median(s) for m, s in common.interleaved(runs, steps, batches).items()}
             rows += [{"system": label, "platform": platform_name, "method": m, "us_per_step": per_step[m] * 1e6}
                      for m in runs]
             log("  %-20s %-9s M-RATTLE %.1f us/step, splitting %.1f us/step (ratio %.2f)" % (
@@ -171,11 +169,10 @@ def paper_systems(platforms, batches, batch_seconds, log):
 
 
 def plot(timings, path):
-    plt = common.pyplot()
     platforms = sorted({r["platform"] for r in timings})
-    fig, axes = plt.subplots(1, len(platforms), figsize=(5.5 * len(platforms), 4.2), squeeze=False)
+    fig, axes = common.panels(len(platforms), 5.5)
     k = 5 if any(int(r["atoms_per_body"]) == 5 for r in timings) else int(timings[0]["atoms_per_body"])
-    for ax, platform in zip(axes[0], platforms):
+    for ax, platform in zip(axes, platforms):
         rows = [r for r in timings if r["platform"] == platform and int(r["atoms_per_body"]) == k]
         for integrator, threads in sorted({(r["integrator"], int(r["threads"])) for r in rows}):
             pts = sorted((int(r["bodies"]), float(r["median_us_per_step"])) for r in rows

@@ -1,17 +1,14 @@
-"""`./benchmarks/run.sh validate-equipartition`: translational against rotational temperature of rigid TIP3P
-and SPC/E water against the step size, NVE with MRattleIntegrator and Verlet + SETTLE, MRattleLangevinIntegrator,
-and (TIP3P; `validate-thermostats --study equipartition`) the thermostats; against Asthagiri & Beck (2024), who
-found NVE rigid SPC/E at equipartition only at 0.5 fs, T_rot below T_trans at 1-3 fs (the method: report())."""
+"""`./benchmarks/run.sh validate-equipartition`: translational against rotational temperature of rigid water
+against the step size (the method: docs/benchmarks.md, "Equipartition")."""
 import math
 import multiprocessing
-import os
 import sys
 import time
 
 import numpy as np
 from openmm import unit
 
-from .common import (block_mean, context as start_context, equilibrate, masses as masses_of, read_csv, removes_cm,
+from .common import (block_mean, context as start_context, equilibrate, masses as masses_of, removes_cm,
                      temperatures, water, water_integrator, write_csv)
 
 MODELS = (('TIP3P', 'tip3p.pdb', 'amber14/tip3p.xml'), ('SPC/E', 'spce.pdb', 'amber14/spce.xml'))
@@ -40,7 +37,6 @@ HALF_STEP = 'Verlet + SETTLE, State velocities (half step)'
 # ps equilibrated, ps dropped, ps sampled, fs between samples: sized for a shared 2-core machine
 # (a PME step of the 2685-atom box took 0.016-0.17 s there).
 LENGTHS = (2.0, 0.3, 2.5, 10)
-MOLECULES = 895  # waters in each of OpenMM's tip3p.pdb and spce.pdb (for reporting kept rows)
 
 
 def summarize(model, method, step_fs, trans, rot, times, energy, failure, wall, steps, molecules):
@@ -57,10 +53,8 @@ def summarize(model, method, step_fs, trans, rot, times, energy, failure, wall, 
 
 
 def run_one(model, system, bodies, start, method, step_fs, discard_ps, production_ps, sample_fs, threads):
-    """One run: translational and rotational temperature and their difference (mean, SE), energy
-    drift (a thermostat's: of the energy plus its heat bath's, the quantity it conserves). VerletIntegrator is leapfrog: its State velocities are half a step behind; its on-step
-    velocities are v + (h/2) f/m made rigid (velocity Verlet's, i.e. RATTLE's), and a second
-    result gives the State velocities as they are."""
+    """One run's rows (summarize); VerletIntegrator's on-step velocities are its leapfrog State velocities plus
+    (h/2) f/m, made rigid, and a second row gives the State velocities as they are."""
     integrator = water_integrator(method, step_fs)
     context = start_context(system, integrator, start[0], start[1], 'CPU', threads)
     masses, cm = masses_of(system), removes_cm(system)
@@ -120,20 +114,19 @@ CSV_COLUMNS = ['model', 'method', 'step_fs', 'Ttrans', 'Ttrans_se', 'Trot', 'Tro
                'difference_se', 'drift_kJ_per_mol_ns_molecule', 'failure', 'steps', 'wall_s']
 
 
-def model_runs(name, methods=None):
-    """(method, step) of every run of a model, the large steps first (cheapest, and where the published
-    bias is); only `methods` if given."""
+def model_runs(name):
+    """(method, step) of every run of a model, the large steps first (cheapest, and where the published bias is)."""
     runs = [(method, step) for step in (3, 4, 2) for method in METHODS]
     runs += [('M-RATTLE Langevin', step) for step in LANGEVIN_STEPS_FS]
     runs += [(method, step) for step in (1, 0.5) for method in METHODS]
     if name in THERMOSTAT_MODELS:
         runs += [(method, step) for method in THERMOSTATS for step in THERMOSTAT_STEPS_FS]
-    return [run for run in runs if methods is None or run[0] in methods]
+    return runs
 
 
 def run_model(task):
     """All runs of one model, in a process of its own."""
-    name, pdb_name, forcefield_name, lengths, threads, methods = task
+    name, pdb_name, forcefield_name, lengths, threads = task
     equilibrate_ps, discard_ps, production_ps, sample_fs = lengths
     began = time.time()
 
@@ -144,60 +137,35 @@ def run_model(task):
     start = equilibrate(system, positions, equilibrate_ps, threads)
     log('%s, %d waters, equilibrated %.1f ps' % (name, len(bodies), equilibrate_ps))
     rows = []
-    for method, step in model_runs(name, methods):
+    for method, step in model_runs(name):
         rows += run_one(name, system, bodies, start, method, step, discard_ps, production_ps, sample_fs, threads)
         log('%s %-17s %.1f fs: %s (%d steps in %.0f s)' % (name, method, step, verdict(rows[-1]), rows[-1]['steps'],
                                                             rows[-1]['wall_s']))
     return len(bodies), rows
 
 
-def run(quick, out, log, threads=1, methods=None):
-    """Every model and step size, the two models in two processes of one CPU thread each (on a shared
-    machine two single-thread processes lose less to waiting than one of two threads); writes out + '.csv',
-    returns the report as markdown lines. With `methods`, only their runs are made, and they replace their
-    own rows in an existing out + '.csv', whose other rows are kept and reported."""
+def run(quick, out, log, threads=1):
+    """Every model and step size, the two models in two processes of one CPU thread each (on a shared machine two
+    single-thread processes lose less to waiting than one of two threads); writes out + '.csv', returns the report."""
     lengths = (0.02, 0.01, 0.04, 4) if quick else LENGTHS
-    tasks = [(name, pdb, forcefield, lengths, threads, methods) for name, pdb, forcefield in MODELS
-             if model_runs(name, methods)]
     began = time.time()
-    with multiprocessing.get_context('spawn').Pool(len(tasks)) as pool:
-        results = pool.map(run_model, tasks)
+    with multiprocessing.get_context('spawn').Pool(len(MODELS)) as pool:
+        results = pool.map(run_model, [(name, pdb, forcefield, lengths, threads) for name, pdb, forcefield in MODELS])
     log('equipartition: both models in %.0f s' % (time.time() - began))
-    by_model = {task[0]: result[0] for task, result in zip(tasks, results)}
     rows = [row for result in results for row in result[1]]
-    if methods is not None and os.path.exists(out + '.csv'):
-        made = {(r['model'], r['method'], r['step_fs']) for r in rows}
-        kept = [r for r in read_csv(out + '.csv') if (r['model'], r['method'], r['step_fs']) not in made]
-        rows = kept + rows
-        by_model.update({r['model']: by_model.get(r['model'], MOLECULES) for r in kept})
     write_csv(out + '.csv', rows, CSV_COLUMNS)
-    return report(rows, by_model, quick, *lengths, threads)
+    return report(rows, {name: result[0] for (name, _, _), result in zip(MODELS, results)}, quick, *lengths, threads)
 
 
 def report(rows, by_model, quick, equilibrate_ps, discard_ps, production_ps, sample_fs, threads):
     md = ['\n## Equipartition of rigid water against step size\n',
-          'OpenMM\'s `app/data/tip3p.pdb` (%d waters, `amber14/tip3p.xml`) and `app/data/spce.pdb` (%d waters, '
-          '`amber14/spce.xml`), PME (0.9 nm), CPU platform with %d thread(s) (the two models in two processes), '
-          'each water set to its model\'s exact '
-          'geometry. Every run starts from the same state per model: %s ps of LangevinMiddle + SETTLE at 300 K '
-          '(1/ps, 2 fs). NVE runs then drop %s ps and sample the velocities every %s fs for %s ps; '
-          '`MRattleLangevinIntegrator` (300 K, 1/ps, its half-step velocities) is run the same way, and for TIP3P '
-          'the thermostats of issue 33, `MRattleNoseHooverIntegrator` and `MRattleBussiIntegrator` (300 K, 10/ps, '
-          'settings as in the thermostats\' section), on their on-step velocities. '
-          'Translational temperature: 1/2 M V^2 of each water over 3 per water minus the CMMotionRemover\'s 3; '
-          'rotational: the rest of the kinetic energy over 3 per water; the same formula for every integrator, '
-          'on its on-step velocities: OpenMM\'s `VerletIntegrator` is leapfrog, so its State velocities (half a '
-          'step behind) get the half kick (h/2) f/m and the rigid-body projection, which gives velocity Verlet\'s '
-          '(RATTLE\'s) on-step velocities; its State velocities as they are make a row of their own '
-          '(`benchmarks/python/suite/equipartition.py`, checked against `MRattleIntegrator`\'s own '
-          '`computeTranslationalTemperature()` in `tests/python/test_kinetic_split.py`). Means +- standard '
-          'errors from %d block averages; the difference T_rot - T_trans is block-averaged as one series '
-          '(the two temperatures are anticorrelated in NVE). Drift: slope of the total energy (the thermostats: plus '
-          '`computeHeatBathEnergy()`, the quantity they conserve), kJ/mol/ns per water.%s\n' % (by_model.get('TIP3P', 0), by_model.get('SPC/E', 0), threads, equilibrate_ps, discard_ps,
-                          sample_fs, production_ps, BLOCKS,
-                          ' **Quick smoke run: too short to conclude anything.**' if quick else '')]
-    md.append('| Model | Step (fs) | Integrator | T_trans (K) | T_rot (K) | T_rot - T_trans (K) | Drift | What the error bars support |')
-    md.append('|---|---|---|---|---|---|---|---|')
+          'TIP3P (%d waters) and SPC/E (%d waters), CPU platform with %d thread(s) per model; from one start per '
+          'model (%s ps of LangevinMiddle + SETTLE), %s ps dropped, then velocities every %s fs for %s ps; %d blocks. '
+          'The method: `docs/benchmarks.md`, "Equipartition".%s\n' % (
+              by_model.get('TIP3P', 0), by_model.get('SPC/E', 0), threads, equilibrate_ps, discard_ps, sample_fs,
+              production_ps, BLOCKS, ' **Quick smoke run: too short to conclude anything.**' if quick else '')]
+    md += ['| Model | Step (fs) | Integrator | T_trans (K) | T_rot (K) | T_rot - T_trans (K) | Drift | What the error bars '
+           'support |', '|---|---|---|---|---|---|---|---|']
     order = {name: k for k, (name, _, _) in enumerate(MODELS)}
     ranks = {method: k for k, method in enumerate(METHODS + (HALF_STEP, 'M-RATTLE Langevin') + THERMOSTATS)}
     rows = sorted(rows, key=lambda r: (order[r['model']], r['step_fs'], ranks[r['method']]))
@@ -208,32 +176,20 @@ def report(rows, by_model, quick, equilibrate_ps, discard_ps, production_ps, sam
         md.append('| %s | %g | %s | %.1f +- %.1f | %.1f +- %.1f | %+.1f +- %.1f | %.3g | %s |' % (
             r['model'], r['step_fs'], r['method'], r['Ttrans'], r['Ttrans_se'], r['Trot'], r['Trot_se'],
             r['Trot_minus_Ttrans'], r['difference_se'], r['drift_kJ_per_mol_ns_molecule'], verdict(r)))
-    md.append('')
-    md.append('Per step size, NVE (3 SE as the threshold), against Asthagiri & Beck (2024): equipartition at 0.5 fs, '
+    md.append('\nPer step size, NVE (3 SE as the threshold), against Asthagiri & Beck (2024): equipartition at 0.5 fs, '
               'T_rot < T_trans at 1-3 fs for rigid SPC/E:\n')
     for step in NVE_STEPS_FS:
-        parts = []
-        for r in rows:
-            if r['step_fs'] == step and r['method'] in METHODS:
-                parts.append('%s %s: %s%s' % (r['model'], r['method'], verdict(r), against_published(r)))
+        parts = ['%s %s: %s%s' % (r['model'], r['method'], verdict(r), against_published(r))
+                 for r in rows if r['step_fs'] == step and r['method'] in METHODS]
         published = ('published: equipartition' if step == 0.5 else
                      'published: T_rot below T_trans' if step <= 3 else 'beyond the published range')
         md.append('- **%g fs** (%s): %s.' % (step, published, '; '.join(parts) or 'not run'))
-    pairs = []
-    for r in rows:
-        if r['method'] == METHODS[0] and not r.get('failure'):
-            other = [o for o in rows if o['model'] == r['model'] and o['step_fs'] == r['step_fs']
-                     and o['method'] == METHODS[1] and not o.get('failure')]
-            if other:
-                d1, e1, d2, e2 = r['Trot_minus_Ttrans'], r['difference_se'], other[0]['Trot_minus_Ttrans'], \
-                    other[0]['difference_se']
-                pairs.append('%s %g fs %.1f' % (r['model'], r['step_fs'], abs(d1 - d2) / math.hypot(e1, e2)))
+    ok = {(r['model'], r['step_fs'], r['method']): r for r in rows if not r.get('failure')}
+    pairs = ['%s %g fs %.1f' % (m, h, abs(r['Trot_minus_Ttrans'] - o['Trot_minus_Ttrans']) /
+                                math.hypot(r['difference_se'], o['difference_se']))
+             for (m, h, method), r in ok.items() for o in [ok.get((m, h, METHODS[1]))] if method == METHODS[0] and o]
     if pairs:
-        md.append('\nA check of the error bars: M-RATTLE and Verlet + SETTLE (on-step) integrate the same equations '
-                  '(both are RATTLE) from the same start: their trajectories differ only by round-off, which grows '
-                  'chaotically, so their T_rot - T_trans should differ only by the statistical error. Their '
-                  'differences, in '
-                  'combined standard errors: %s. Values well above 2 mean the block error bars understate the '
-                  'scatter at this run length, and the verdicts above are to be read with that.' % ', '.join(pairs))
+        md.append('\nM-RATTLE against Verlet + SETTLE (on-step), the same equations from the same start: their '
+                  'T_rot - T_trans differ by, in combined standard errors: %s.' % ', '.join(pairs))
     return md
 

@@ -8,7 +8,7 @@ import openmm
 from openmm import unit
 
 import mrattle
-from .common import (KB, block_mean, context as start_context, masses as masses_of, removes_cm, rigid_split,
+from .common import (KB, block_mean, context as start_context, density, masses as masses_of, removes_cm, rigid_split,
                      temperatures, water, water_integrator, write_csv)
 
 
@@ -59,13 +59,13 @@ def run_water(method, barostat, equilibrate, production, sample, seed, log):
         series['Ttrans'].append(2 * kt / ((dof - 3 * len(bodies)) * KB))
         series['Trot'].append(2 * kr / (3 * len(bodies) * KB))
         series['U'].append(state.getPotentialEnergy().value_in_unit(unit.kilojoule_per_mole) / len(bodies))
-        a, b, c = state.getPeriodicBoxVectors(asNumpy=True).value_in_unit(unit.nanometers)
-        series['density'].append(masses.sum() * 1.66053906660e-24 / (a[0] * b[1] * c[2] * 1e-21))  # g/mL
+        series['density'].append(density(state, masses))
         if k % 10 == 0:
             frames.append(state.getPositions(asNumpy=True).value_in_unit(unit.nanometers))
     result = {key: block_mean(values) for key, values in series.items()}
     if not barostat:
-        result['peak'] = oo_peak(frames[::2], [b[0] for b in bodies], a[0])
+        result['peak'] = oo_peak(frames[::2], [b[0] for b in bodies],
+                                 state.getPeriodicBoxVectors(asNumpy=True).value_in_unit(unit.nanometers)[0][0])
     log('%-22s %s %d+%d steps in %.0f s' % (method, 'NPT' if barostat else 'NVT', equilibrate, production,
                                             time.time() - start))
     return result
@@ -103,48 +103,46 @@ def run(quick, out, log):
     npt = dict(equilibrate=int(10000 * scale), production=int(40000 * scale), sample=50)
     rows = []
     report = ['\n## Langevin dynamics with M-RATTLE: validation against LangevinMiddle + SETTLE\n',
-              'CPU platform, friction 1/ps, 2 fs, OpenMM\'s `app/data/tip3p.pdb` (895 waters, set to '
-              'exact TIP3P geometry first) with `amber14/tip3p.xml` and PME (0.9 nm). Means +- standard errors '
-              'from 10 block averages; '
-              '%s.\n' % ('a **quick** smoke run: too short to conclude anything' if quick else
-                         'NVT %d ps after %d ps, NPT %d ps after %d ps' % (
-                             nvt['production'] * 0.002, nvt['equilibrate'] * 0.002,
-                             npt['production'] * 0.002, npt['equilibrate'] * 0.002))]
+              'OpenMM\'s tip3p.pdb, %s. The method: `docs/benchmarks.md`, "Langevin".\n' % (
+                  'a **quick** smoke run: too short to conclude anything' if quick else
+                  'NVT %d ps after %d ps, NPT %d ps after %d ps' % (
+                      nvt['production'] * 0.002, nvt['equilibrate'] * 0.002,
+                      npt['production'] * 0.002, npt['equilibrate'] * 0.002))]
     results = {}
     for method in ('M-RATTLE Langevin', 'LangevinMiddle + SETTLE'):
         results[(method, 'NVT')] = run_water(method, False, seed=1, log=log, **nvt)
         results[(method, 'NPT')] = run_water(method, True, seed=2, log=log, **npt)
-    report.append('| Quantity | M-RATTLE Langevin | LangevinMiddle + SETTLE | Target | Verdict |')
-    report.append('|---|---|---|---|---|')
+    report += ['| Quantity | M-RATTLE Langevin | LangevinMiddle + SETTLE | Target | Verdict |', '|---|---|---|---|---|']
 
     def fmt(pair, digits=2):
         return '%.*f +- %.*f' % (digits, pair[0], digits, pair[1])
+
+    def row(quantity, a, b):
+        rows.append(dict(quantity=quantity, mrattle=a[0], mrattle_error=a[1], settle=b[0], settle_error=b[1]))
 
     m, s = results[('M-RATTLE Langevin', 'NVT')], results[('LangevinMiddle + SETTLE', 'NVT')]
     for key, name, tolerance in (('T', 'kinetic temperature (K)', 0.01), ('Ttrans', 'translational temperature (K)', 0.02),
                                  ('Trot', 'rotational temperature (K)', 0.02)):
         report.append('| %s | %s | %s | 300 +- %d%% | %s |' % (name, fmt(m[key]), fmt(s[key]), round(100 * tolerance),
                                                              verdict(m[key][0], m[key][1], 300, tolerance)))
-        rows.append(dict(quantity=key, mrattle=m[key][0], mrattle_error=m[key][1], settle=s[key][0], settle_error=s[key][1]))
-    difference = m['U'][0] - s['U'][0]
-    combined = math.hypot(m['U'][1], s['U'][1])
+        row(key, m[key], s[key])
+    difference, combined = m['U'][0] - s['U'][0], math.hypot(m['U'][1], s['U'][1])
     report.append('| potential energy per molecule (kJ/mol) | %s | %s | equal within 3 combined SE | %s |' % (
         fmt(m['U'], 3), fmt(s['U'], 3), 'difference %.3f = %.1f SE: %s' % (
             difference, abs(difference) / combined, 'consistent' if abs(difference) <= 3 * combined else 'NOT consistent')))
-    rows.append(dict(quantity='U', mrattle=m['U'][0], mrattle_error=m['U'][1], settle=s['U'][0], settle_error=s['U'][1]))
+    row('U', m['U'], s['U'])
     peak_m, peak_s = m['peak'], s['peak']
     report.append('| O-O g(r) first peak: height (position, nm) | %.3f (%.4f) | %.3f (%.4f) | heights within 3%% | '
                   'differ by %.1f%% (no error bar: one histogram per run) |' % (
                       peak_m[0], peak_m[1], peak_s[0], peak_s[1], 100 * abs(peak_m[0] / peak_s[0] - 1)))
-    rows.append(dict(quantity='gOO_peak', mrattle=peak_m[0], mrattle_error='', settle=peak_s[0], settle_error=''))
+    row('gOO_peak', (peak_m[0], ''), (peak_s[0], ''))
     dm, ds = results[('M-RATTLE Langevin', 'NPT')]['density'], results[('LangevinMiddle + SETTLE', 'NPT')]['density']
     report.append('| density at 1 bar (g/mL) | %s | %s | within 0.005 g/mL | difference %.4f +- %.4f |' % (
         fmt(dm, 4), fmt(ds, 4), dm[0] - ds[0], math.hypot(dm[1], ds[1])))
-    rows.append(dict(quantity='density', mrattle=dm[0], mrattle_error=dm[1], settle=ds[0], settle_error=ds[1]))
+    row('density', dm, ds)
 
-    report.append('\n### Rigid liquid benzene (64 molecules, PME) at 298 K\n')
-    report.append('| Step (fs) | translational T (K) | rotational T (K) | translational within 2% | rotational within 2% |')
-    report.append('|---|---|---|---|---|')
+    report += ['\n### Rigid liquid benzene (64 molecules, PME) at 298 K\n', '| Step (fs) | translational T (K) | '
+               'rotational T (K) | translational within 2% | rotational within 2% |', '|---|---|---|---|---|']
     largest_stable = None
     for step in (2, 4, 8, 12, 16):
         result = benzene_temperatures(step, int(500 * (0.04 if quick else 1)), log, 0.2 if quick else 20.0)
@@ -155,10 +153,8 @@ def run(quick, out, log):
         (tt, te), (tr, re) = result
         report.append('| %d | %.1f +- %.1f | %.1f +- %.1f | %s | %s |' % (
             step, tt, te, tr, re, verdict(tt, te, 298, 0.02), verdict(tr, re, 298, 0.02)))
-        rows.append(dict(quantity='benzene_%dfs' % step, mrattle=tt, mrattle_error=te, settle=tr, settle_error=re))
-    report.append('\nLargest step tried that stayed stable for the run: %s fs (the largest tried). Benzene\'s block '
-                  'errors (10 ps of production) are about as large as the 2%% tolerance: longer runs are needed to '
-                  'resolve it at the larger steps.' % largest_stable)
+        row('benzene_%dfs' % step, (tt, te), (tr, re))
+    report.append('\nLargest step tried that stayed stable for the run: %s fs.' % largest_stable)
     write_csv(out + '.csv', rows)
     return report
 

@@ -1,10 +1,4 @@
-"""Long-run energy drift: NVE of the 27-benzene cluster from equilibrated starts, both methods.
-
-The drift column of the accuracy section comes from 4 ps runs that start on a lattice still
-relaxing; here each start is first equilibrated with a thermostat (equilibrated_start), then M-RATTLE and the splitting method each run long
-NVE from that one state, and the drift is the least-squares slope of the total energy with
-its standard error (stats.drift_with_error).
-"""
+"""Long-run energy drift: NVE of the 27-benzene cluster from equilibrated starts, both methods."""
 import numpy as np
 import openmm
 from openmm import unit
@@ -37,9 +31,8 @@ def equilibrated_start(temperature, seed, equilibrate_ps, log):
 
 
 def without_net_motion(x, v, masses):
-    """Velocities less the whole system's centre-of-mass velocity and rigid rotation (zero total
-    momentum and angular momentum; the thermostat leaves both random). Both removed motions are
-    rigid, so every body stays rigid."""
+    """Velocities less the whole system's centre-of-mass velocity and rigid rotation (both rigid motions, so every
+    body stays rigid)."""
     mass = masses.sum()
     c = masses.dot(x) / mass
     v = v - masses.dot(v) / mass
@@ -49,17 +42,14 @@ def without_net_motion(x, v, masses):
 
 
 def molecule_centres(positions, system, bodies):
-    """Centre of mass of each body (nm)."""
     masses = common.masses(system)
     return np.array([masses[b].dot(positions[b]) / masses[b].sum() for b in bodies])
 
 
 def departed(centres, radius):
-    """How many molecules have left the cluster: centres farther than `radius` (nm) from the centre
-    of the molecules that remain. The centre starts at the centres' component-wise median (which a
-    few far-away molecules cannot drag off the cluster, as they drag the mean) and is then the mean
-    of the molecules within `radius` of it, until that set settles.
-    Returns (count, distance of the farthest remaining molecule from that centre)."""
+    """How many molecules are farther than `radius` (nm) from the centre of those that remain (from the centres'
+    median, which far-away molecules cannot drag, as they drag the mean, until that set settles), and the
+    farthest remaining one's distance."""
     centres = np.asarray(centres, float)
     centre = np.median(centres, axis=0)
     inside = None
@@ -84,21 +74,16 @@ def run_one(system, positions, velocities, bodies, method, step_fs, total_ps, sa
     drift, error = stats.drift_with_error(t, e) if ok else (float("nan"), float("nan"))
     final = r["context"].getState(getPositions=True).getPositions(asNumpy=True).value_in_unit(unit.nanometer)
     gone, farthest = departed(molecule_centres(np.array(final), system, bodies), radius)
-    return {
-        "method": method, "step_fs": step_fs, "length_ps": float(t[-1] - t[0]) if len(t) else 0.0,
-        "temperature_K": float(np.mean(2 * r["kinetic"] / (r["dof"] * KB))),
-        "fluctuation": float(np.std(e)) if len(e) else float("nan"),
-        "drift_per_ns": drift, "drift_error_per_ns": error,
-        "verdict": verdict(drift, error),
-        "departed": gone, "farthest_nm": farthest,
-        "rigidity_nm": float(r["rigidity"].max()) if r["rigidity"].size else float("nan"),
-        "wall_s": r["wall"], "failure": r["failure"] or "",
-        "series_time": t - t[0] if len(t) else t, "series_energy": e - e[0] if len(e) else e,
-    }
+    return {"method": method, "step_fs": step_fs, "length_ps": float(t[-1] - t[0]) if len(t) else 0.0,
+            "temperature_K": float(np.mean(2 * r["kinetic"] / (r["dof"] * KB))),
+            "fluctuation": float(np.std(e)) if len(e) else float("nan"), "drift_per_ns": drift,
+            "drift_error_per_ns": error, "verdict": verdict(drift, error), "departed": gone, "farthest_nm": farthest,
+            "rigidity_nm": float(r["rigidity"].max()) if r["rigidity"].size else float("nan"), "wall_s": r["wall"],
+            "failure": r["failure"] or "", "series_time": t - t[0] if len(t) else t,
+            "series_energy": e - e[0] if len(e) else e}
 
 
 def within_se(drift, error, sigmas=2.0):
-    """Whether a drift is within `sigmas` standard errors of zero."""
     return abs(drift) <= sigmas * error
 
 
@@ -112,11 +97,8 @@ def verdict(drift, error, sigmas=2.0):
 
 
 def run(temperature, plan, equilibrate_ps, sample_ps, radius, log):
-    """For each seed, one equilibrated start; from it, each method at each step size that lists the seed.
-
-    plan: {step_fs: (picoseconds per run, [seeds])}. Returns rows (one per run) with the
-    E(t) - E(0) series attached (keys series_time, series_energy).
-    """
+    """For each seed one equilibrated start, from it each method at each step size whose plan lists the seed
+    (plan: {step_fs: (ps per run, [seeds])}): a row per run, with its E(t) - E(0) (series_time, series_energy)."""
     rows = []
     seeds = sorted({s for _, ss in plan.values() for s in ss})
     for seed in seeds:
@@ -157,11 +139,10 @@ def summary(rows):
 
 def plot(rows, path, block_ps=5.0):
     """E(t) - E(0) per start and step size: every sample (faint), block means (bold) and the fitted line."""
-    plt = common.pyplot()
     panels = sorted({(r["step_fs"], r["seed"]) for r in rows}, key=lambda k: (-k[0], k[1]))
-    fig, axes = plt.subplots(1, len(panels), figsize=(5.2 * len(panels), 4.2), squeeze=False)
+    fig, axes = common.panels(len(panels))
     colours = {"M-RATTLE": "C0", "splitting": "C3"}
-    for ax, (step_fs, seed) in zip(axes[0], panels):
+    for ax, (step_fs, seed) in zip(axes, panels):
         for r in rows:
             t, e = r["series_time"], r["series_energy"]
             if (r["step_fs"], r["seed"]) != (step_fs, seed) or len(t) < 4:
@@ -180,5 +161,4 @@ def plot(rows, path, block_ps=5.0):
         ax.set_xlabel("time (ps)")
         ax.set_ylabel("E(t) - E(0) (kJ/mol)")
         ax.legend(fontsize=7)
-    fig.suptitle("27 rigid benzene molecules, NVE from equilibrated starts (faint: every sample)")
-    common.save_figure(fig, path)
+    common.save_figure(fig, path, "27 rigid benzene molecules, NVE from equilibrated starts (faint: every sample)")

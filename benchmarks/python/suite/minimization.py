@@ -1,20 +1,19 @@
 """RigidBodyMinimizer against OpenMM's LocalEnergyMinimizer (docs/minimization.md), two studies:
 
     ./benchmarks/run.sh validate-minimization [--platform CPU] [--quick] [--only NAME] [--repeats 3]
-        each System minimized by both from one start by the C++ program minimize_compare (which times them
-        and counts LocalEnergyMinimizer's iterations in a second, untimed run): a table, docs/results/minimization.csv
+        each System minimized by both from one start, timed; LocalEnergyMinimizer's iterations counted in a second,
+        untimed run by the C++ program minimizer_iterations: a table, docs/results/minimization.csv
     ./benchmarks/run.sh validate-minimization-starts [--starts 8] [--sigma 0.005] [--tolerances 10 5 2 1]
         both minimizers' final energies on tip3p.pdb from many starts (where a minimizer stops depends on its
         path, and its path on round-off); LocalEnergyMinimizer's end read with the rigid minimizer's own test of
         the RMS generalized force: a table, docs/results/minimization_starts.csv and .png
 """
 import argparse
-import csv
-import io
 import math
 import os
 import subprocess
 import tempfile
+import time
 
 import numpy as np
 import openmm
@@ -25,6 +24,10 @@ from . import common
 
 ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__)))))
 DATA = os.path.join(os.path.dirname(app.__file__), 'data')
+
+
+def nm(state):
+    return state.getPositions(asNumpy=True).value_in_unit(unit.nanometer)
 
 
 def parser(description, out):
@@ -59,36 +62,119 @@ def cases(quick):
         'test.pdb', ['amber14-all.xml', 'amber14/tip3p.xml'], constraints=app.HBonds)
 
 
+def rms_generalized_force(system, x, f, bodies):
+    """RMS over particles of the force projected on the allowed motion: each body's rigid motion (unit masses),
+    the constraints' tangent space for the other particles (A A^T l = A f by conjugate gradients, A's row k
+    the unit vector of constraint k on its two particles)."""
+    n, masses = len(x), common.masses(system)
+    free = np.ones(n, bool)
+    total = 0.0
+    for body in bodies:
+        free[body] = False
+        r, forces = x[body] - x[body].mean(0), f[body]
+        values, vectors = np.linalg.eigh((r * r).sum() * np.eye(3) - r.T @ r)
+        kept = values > 1e-9 * values[2]
+        total += np.sum((vectors[:, kept].T @ np.cross(r, forces).sum(0)) ** 2 / values[kept])
+        total += forces.sum(0) @ forces.sum(0) / len(body)
+    free &= masses != 0
+    pairs = np.array([c[:2] for c in map(system.getConstraintParameters, range(system.getNumConstraints()))
+                      if free[c[0]] and free[c[1]]], int).reshape(-1, 2)
+    projected = np.where(free[:, None], f, 0.0)
+    u = x[pairs[:, 1]] - x[pairs[:, 0]]
+    u /= np.linalg.norm(u, axis=1)[:, None]
+    along = lambda g: np.einsum('ij,ij->i', u, g[pairs[:, 1]] - g[pairs[:, 0]])  # noqa: E731  (A g)
+
+    def spread(l):  # A^T l
+        out = np.zeros((n, 3))
+        np.add.at(out, pairs[:, 0], -u * l[:, None])
+        np.add.at(out, pairs[:, 1], u * l[:, None])
+        return out
+    b = along(projected)
+    l, residual, direction, rr = np.zeros(len(pairs)), b.copy(), b.copy(), b @ b
+    for _ in range(1000):
+        if rr <= 1e-28 * max(b @ b, 1e-300):
+            break
+        q = along(spread(direction))
+        alpha = rr / (direction @ q)
+        l, residual = l + alpha * direction, residual - alpha * q
+        rr, previous = residual @ residual, rr
+        direction = residual + rr / previous * direction
+    projected -= spread(l)
+    return math.sqrt((total + (projected ** 2).sum()) / n)
+
+
+def shape_change(a, b, bodies):
+    """The largest change of a distance within one body."""
+    d = lambda x, body: np.linalg.norm(x[body][:, None] - x[body], axis=2)  # noqa: E731
+    return max((np.abs(d(a, body) - d(b, body)).max() for body in bodies), default=0.0)
+
+
+def compare_one(name, tolerance, system, positions, bodies, platform, repeats, program):
+    """Both minimizers from the rigid integrator's exact shapes, each run `repeats` times alternated with the
+    other, the fastest run counting; LocalEnergyMinimizer's iterations counted by `program` in a second run."""
+    integrator = mrattle.MRattleIntegrator(0.001)
+    for body in bodies or []:
+        integrator.addRigidBody(body)
+    rigid = common.context(system, integrator, positions, platform_name=platform, threads=1)
+    start = nm(rigid.getState(getPositions=True))
+    bodies = [list(b) for b in integrator.getBodiesInEffect()]
+    verlet = openmm.VerletIntegrator(0.001)
+    verlet.setConstraintTolerance(integrator.getConstraintTolerance())
+    flexible = common.context(system, verlet, start, platform_name=platform, threads=1)
+    seconds = {'RigidBodyMinimizer': [], 'LocalEnergyMinimizer': []}
+    for _ in range(repeats):
+        rigid.setPositions(start)
+        began = time.perf_counter()
+        report = mrattle.minimizeEnergy(rigid, tolerance)
+        seconds['RigidBodyMinimizer'].append(time.perf_counter() - began)
+        flexible.setPositions(start)
+        before = flexible.getState(getEnergy=True).getPotentialEnergy().value_in_unit(unit.kilojoule_per_mole)
+        began = time.perf_counter()
+        openmm.LocalEnergyMinimizer.minimize(flexible, tolerance)
+        seconds['LocalEnergyMinimizer'].append(time.perf_counter() - began)
+    with tempfile.TemporaryDirectory() as scratch:
+        with open(os.path.join(scratch, 'system.xml'), 'w') as f:
+            f.write(openmm.XmlSerializer.serialize(system))
+        np.savetxt(os.path.join(scratch, 'positions.txt'), start, '%r')
+        counted = subprocess.run([program, os.path.join(scratch, 'system.xml'), os.path.join(scratch, 'positions.txt'),
+                                  platform, repr(tolerance), repr(integrator.getConstraintTolerance())],
+                                 check=True, capture_output=True, text=True).stdout.split()
+    rows = []
+    for minimizer, context, energy_before, held in (('RigidBodyMinimizer', rigid, report.initialEnergy, bodies),
+                                                    ('LocalEnergyMinimizer', flexible, before, [])):
+        end = context.getState(getPositions=True, getForces=True, getEnergy=True)
+        after = end.getPotentialEnergy().value_in_unit(unit.kilojoule_per_mole)
+        forces = end.getForces(asNumpy=True).value_in_unit(unit.kilojoule_per_mole / unit.nanometer)
+        rows.append(dict(case=name, tolerance=tolerance, minimizer=minimizer, energy_before='%.6f' % energy_before,
+                         energy_after='%.6f' % after, rms_force='%.4f' % rms_generalized_force(system, nm(end), forces, held),
+                         max_shape_change='%.3g' % shape_change(start, nm(end), bodies),
+                         seconds='%.3f' % min(seconds[minimizer]), iterations=report.iterations,
+                         evaluations=report.evaluations, note=''))
+    same = abs(float(counted[2]) - after) <= 1e-9 * abs(after) + 1e-9
+    rows[1].update(iterations=int(counted[0]), evaluations=int(counted[1]), note=(
+        'iterations counted in a second run that ended at the same energy' if same else
+        'iterations counted in a second run that ended ELSEWHERE: count not valid'))
+    return rows
+
+
 def compare(argv=None):
     parser_ = parser('RigidBodyMinimizer against LocalEnergyMinimizer on several Systems', 'minimization.csv')
     parser_.add_argument('--quick', action='store_true', help='the benzene cluster only')
     parser_.add_argument('--only', help='the cases whose name contains this (no CSV is written)')
     parser_.add_argument('--repeats', type=int, default=3, help='runs of each minimizer, alternated; the fastest counts')
     args = parser_.parse_args(argv)
-    program = os.path.join(args.build, 'benchmarks', 'cpp', 'minimize_compare')
+    program = os.path.join(args.build, 'benchmarks', 'cpp', 'minimizer_iterations')
     rows, notes = [], []
     for name, tolerance, build in cases(args.quick):
         if args.only and args.only not in name:
             continue
-        system, positions, bodies = build()
-        with tempfile.TemporaryDirectory() as scratch:
-            with open(os.path.join(scratch, 'system.xml'), 'w') as f:
-                f.write(openmm.XmlSerializer.serialize(system))
-            with open(os.path.join(scratch, 'positions.txt'), 'w') as f:
-                for p in positions.value_in_unit(unit.nanometer) if unit.is_quantity(positions) else positions:
-                    f.write('%r %r %r\n' % (float(p[0]), float(p[1]), float(p[2])))
-            with open(os.path.join(scratch, 'bodies.txt'), 'w') as f:
-                for body in bodies or []:
-                    f.write(' '.join(map(str, body)) + '\n')
-            output = subprocess.run([program] + [os.path.join(scratch, n) for n in ('system.xml', 'positions.txt',
-                                     'bodies.txt')] + [args.platform, repr(tolerance), name, str(args.repeats)],
-                                    check=True, capture_output=True, text=True).stdout
-        lines = output.splitlines()
-        notes += [l[2:] + ' (tolerance %g)' % tolerance for l in lines if l.startswith('#')]
-        for row in csv.DictReader(io.StringIO('\n'.join(l for l in lines if not l.startswith('#')))):
-            row['tolerance'] = tolerance
-            rows.append(row)
-        print('\n'.join(lines[1:]), flush=True)
+        mine, theirs = compare_one(name, tolerance, *build(), args.platform, max(1, args.repeats), program)
+        rows += [mine, theirs]
+        if mine['iterations'] > 0 and theirs['iterations'] > 0:
+            per = lambda key: (float(mine['seconds']) / mine[key]) / (float(theirs['seconds']) / theirs[key])  # noqa: E731
+            notes.append('%s: cost per iteration, RigidBodyMinimizer / LocalEnergyMinimizer = %.3f; per evaluation '
+                         '%.3f (tolerance %g)' % (name, per('iterations'), per('evaluations'), tolerance))
+        print(mine, theirs, sep='\n', flush=True)
     if not args.quick and not args.only:
         common.write_csv(args.out, rows, ['case', 'tolerance', 'minimizer', 'iterations', 'evaluations', 'energy_before',
                                           'energy_after', 'rms_force', 'max_shape_change', 'seconds', 'note'])
@@ -101,22 +187,8 @@ def compare(argv=None):
         print('| %s | %g | %s | %s | %s | %.1f | %.1f | %.3g | %s | %.2f |' % (
             r['case'], r['tolerance'], r['minimizer'], r['iterations'], r['evaluations'], float(r['energy_before']),
             float(r['energy_after']), float(r['rms_force']), r['max_shape_change'], float(r['seconds'])))
-    print()
-    for note in notes:
-        print('- ' + note)
-    for r in rows:
-        if r['note']:
-            print('- %s, %s: %s' % (r['case'], r['minimizer'], r['note']))
-
-
-
-def meanAndError(values):
-    n = len(values)
-    mean = sum(values) / n
-    if n < 2:
-        return mean, float('nan')
-    variance = sum((v - mean) ** 2 for v in values) / (n - 1)
-    return mean, math.sqrt(variance / n)
+    print('\n' + ''.join('- %s\n' % n for n in notes + ['%s, %s: %s' % (r['case'], r['minimizer'], r['note'])
+                                                     for r in rows if r['note']]))
 
 
 def starts(argv=None):
@@ -134,7 +206,7 @@ def starts(argv=None):
     rigid = openmm.Context(system, mrattle.MRattleIntegrator(1 * unit.femtoseconds), platform, properties)
     settle = openmm.Context(system, openmm.VerletIntegrator(1 * unit.femtoseconds), platform, properties)
     rigid.setPositions(pdb.positions)
-    exact = rigid.getState(getPositions=True).getPositions(asNumpy=True).value_in_unit(unit.nanometer)
+    exact = nm(rigid.getState(getPositions=True))
     waters = [[atom.index for atom in residue.atoms()] for residue in pdb.topology.residues()]
     kJ = unit.kilojoules_per_mole
 
@@ -166,12 +238,7 @@ def starts(argv=None):
             row['matched_rigid_energy'] = matched.finalEnergy
             row['matched_gap'] = matched.finalEnergy - row['openmm_energy']
             rows.append(row)
-            print('start %d tolerance %g: rigid %.1f (%d iterations, rms %.2f), LocalEnergyMinimizer %.1f (rms %.2f%s), '
-                  'gap %.1f; rigid to that rms %.1f, gap %.1f'
-                  % (start, tolerance, row['rigid_energy'], row['rigid_iterations'], row['rigid_rms_force'],
-                     row['openmm_energy'], row['openmm_rms_force'], ', passes' if passes else '', row['gap'],
-                     row['matched_rigid_energy'], row['matched_gap']), flush=True)
-
+            print(row, flush=True)
     common.write_csv(args.out, rows)
 
     print('\n%d starts (sigma %g nm), %s platform, OpenMM %s; mean +- standard error over the starts\n'
@@ -183,7 +250,7 @@ def starts(argv=None):
     summary = []
     for tolerance in args.tolerances:
         mine = [r for r in rows if r['tolerance'] == tolerance]
-        stats = {key: meanAndError([r[key] for r in mine])
+        stats = {key: (np.mean([r[key] for r in mine]), np.std([r[key] for r in mine], ddof=1) / math.sqrt(len(mine)))
                  for key in ('rigid_energy', 'rigid_iterations', 'openmm_energy', 'gap', 'rigid_rms_force',
                              'openmm_rms_force', 'matched_gap')}
         lower = sum(r['gap'] < 0 for r in mine)
@@ -193,8 +260,7 @@ def starts(argv=None):
                                   *stats['openmm_energy'], *stats['gap'], lower, len(mine),
                                   stats['rigid_rms_force'][0], *stats['openmm_rms_force'], *stats['matched_gap']))
 
-    plt = common.pyplot()
-    fig, ax = plt.subplots(figsize=(6, 4.2))
+    fig, (ax,) = common.panels(1, 6)
     tolerances = [t for t, _ in summary]
     for key, label in (('rigid_energy', 'RigidBodyMinimizer'), ('openmm_energy', 'LocalEnergyMinimizer (SETTLE)')):
         ax.errorbar(tolerances, [s[key][0] for _, s in summary], yerr=[s[key][1] for _, s in summary],

@@ -9,18 +9,11 @@ LABELS = {"temperature": "temperature (6N DOF)", "radius": "farthest molecule fr
 
 
 def run_many(method, seeds, total_ps, equilibrate_ps, step_fs, temperature, log):
-    """Independent runs (one per seed; the same seeds for every method), equilibration dropped.
-
-    Returns per-quantity lists with one array per run, so that each run's series can be
-    decorrelated on its own before the runs are pooled.
-    """
-    pooled = {"temperature": [], "translational": [], "rotational": [], "cc": [], "target": [], "radius": []}
-    for seed in seeds:
-        r = run(method, total_ps, step_fs, temperature, seed, log)
-        skip = int(round(equilibrate_ps / r["frame_ps"]))
-        for key in pooled:
-            pooled[key].append(r[key][skip:])
-    return pooled
+    """One run per seed (the same seeds for every method), equilibration dropped: {quantity: one array per run}, so
+    that each run's series can be decorrelated on its own before the runs are pooled."""
+    runs = [run(method, total_ps, step_fs, temperature, seed, log) for seed in seeds]
+    return {key: [r[key][int(round(equilibrate_ps / r["frame_ps"])):] for r in runs]
+            for key in ("temperature", "translational", "rotational", "cc", "target", "radius")}
 
 
 def run(method, total_ps, step_fs, temperature, seed, log):
@@ -62,8 +55,7 @@ def run(method, total_ps, step_fs, temperature, seed, log):
 
 
 def row(label, per_run):
-    """One quantity: each method's mean, the spread of run means and a KS test on the decorrelated pooled
-    samples. per_run: {method: [one array per run]}."""
+    """One quantity's row from per_run, {method: [one array per run]}: means, the spread of run means, a KS test."""
     a, b = _decorrelated(per_run["M-RATTLE"]), _decorrelated(per_run["splitting"])
     d, p = stats.ks_two_sample(a, b)
     means = [r.mean() for runs in per_run.values() for r in runs]
@@ -75,20 +67,14 @@ def row(label, per_run):
 
 def _inertia(points, masses):
     """Inertia tensor of point masses about the origin."""
-    r2 = (points ** 2).sum(-1)
-    return (masses * r2).sum() * np.eye(3) - np.einsum("i,ij,ik->jk", masses, points, points)
+    return (masses * (points ** 2).sum(-1)).sum() * np.eye(3) - np.einsum("i,ij,ik->jk", masses, points, points)
 
 
 def equipartition_target(x, masses):
-    """Expected mean rotational / translational KE per molecule when total momentum P and
-    angular momentum L are conserved (an isolated cluster), and the farthest molecule's
-    distance from the centre of mass.
-
-    P = 0 removes 3 translational degrees of freedom. L = 0 removes the 3 modes of a global
-    rotation, whose kinetic energy is shared between the molecules' orbital (translational)
-    motion and their spin as tr(I_total^-1 I_orbital) to 3 - that (canonical conditioning
-    on L; exact to O(1/N) in NVE). x: (molecules, sites, 3) nm; masses: the sites' masses.
-    """
+    """Expected mean rotational / translational KE per molecule with total momentum P and angular momentum L
+    conserved (P = 0 takes 3 translational degrees of freedom; L = 0 the 3 of a global rotation, shared between
+    orbital motion and spin as tr(I_total^-1 I_orbital) to 3 - that), and the farthest molecule's distance from
+    the centre of mass. x: (molecules, sites, 3) nm; masses: the sites' masses."""
     n = x.shape[0]
     mass = masses.sum()
     centres = (masses[None, :, None] * x).sum(1) / mass
@@ -130,8 +116,7 @@ def compare(results):
 
 
 def plot(results, path):
-    plt = common.pyplot()
-    fig, axes = plt.subplots(1, 3, figsize=(15, 4.2))
+    fig, axes = common.panels(3, 5)
     for method, r in results.items():
         axes[0].hist(np.concatenate(r["temperature"]), bins=30, density=True, histtype="step", lw=1.5, label=method)
         axes[1].hist(np.concatenate(r["translational"]) / KB, bins=30, density=True, histtype="step", lw=1.5,
@@ -145,5 +130,4 @@ def plot(results, path):
     axes[2].set_xlabel("intermolecular C-C distance (nm)")
     for ax in axes:
         ax.legend(fontsize=8)
-    fig.suptitle("27 rigid benzene molecules, NVE: M-RATTLE vs splitting")
-    common.save_figure(fig, path)
+    common.save_figure(fig, path, "27 rigid benzene molecules, NVE: M-RATTLE vs splitting")

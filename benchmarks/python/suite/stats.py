@@ -6,17 +6,13 @@ import numpy as np
 
 def fitted_order(step_sizes, errors):
     """Slope of log(error) against log(step size): the observed order of the error."""
-    h = np.log(np.asarray(step_sizes, float))
-    e = np.log(np.asarray(errors, float))
-    slope, _ = np.polyfit(h, e, 1)
-    return float(slope)
+    return float(np.polyfit(np.log(np.asarray(step_sizes, float)), np.log(np.asarray(errors, float)), 1)[0])
 
 
 def drift_with_error(times_ps, energies):
     """Drift (kJ/mol/ns) and its standard error: the least-squares slope's error, inflated by the
     residuals' statistical inefficiency (energies sampled along a trajectory are correlated)."""
-    t = np.asarray(times_ps, float)
-    e = np.asarray(energies, float)
+    t, e = np.asarray(times_ps, float), np.asarray(energies, float)
     slope, intercept = np.polyfit(t, e, 1)
     residuals = e - (slope * t + intercept)
     if t.size < 4:
@@ -26,13 +22,9 @@ def drift_with_error(times_ps, energies):
 
 
 def ks_two_sample(a, b):
-    """Two-sample Kolmogorov-Smirnov statistic and asymptotic p-value.
-
-    Samples from MD are correlated: callers pass decorrelated (subsampled) series, and the
-    p-value is only as honest as that subsampling.
-    """
-    a = np.sort(np.asarray(a, float))
-    b = np.sort(np.asarray(b, float))
+    """Two-sample Kolmogorov-Smirnov statistic and asymptotic p-value (of decorrelated series: the p-value is only
+    as honest as that subsampling)."""
+    a, b = np.sort(np.asarray(a, float)), np.sort(np.asarray(b, float))
     values = np.concatenate([a, b])
     cdf_a = np.searchsorted(a, values, side="right") / a.size
     cdf_b = np.searchsorted(b, values, side="right") / b.size

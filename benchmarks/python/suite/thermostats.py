@@ -12,29 +12,18 @@ from openmm import unit
 
 import mrattle
 
-from . import equipartition
-from .common import (KB, TEMPERATURE, block_mean, context as start_context, equilibrate, masses as masses_of, read_csv,
-                     temperatures, water, water_integrator, write_csv)
+from .common import (KB, TEMPERATURE, block_mean, context as start_context, density, equilibrate, masses as masses_of,
+                     read_csv, temperatures, water, water_integrator, write_csv)
 from .stats import drift_with_error
 
 METHODS = ('M-RATTLE NVE', 'M-RATTLE Nose-Hoover chain', 'M-RATTLE CSVR', 'LangevinMiddle + SETTLE')
 BLOCKS = 10
-DALTON_GRAMS = 1.66053906660e-24
 SAMPLE_FS = 10.0  # between samples of every run
 
 
-def block_variance(values, blocks=BLOCKS):
-    """The variance of a series about its mean and its standard error: the mean squared deviation
-    from the whole series' mean, block-averaged (so the blocks' own means moving is counted)."""
-    values = np.asarray(values, float)
-    squares = (values - values.mean()) ** 2
-    return block_mean(squares, blocks)
-
-
 def diffusion(times, oxygens, segments=4):
-    """D (1e-5 cm^2/s) from the oxygens' mean-squared displacement: in each of `segments` equal
-    time segments of the run, the slope over lags of 20-60 % of the segment (all time origins
-    in it), D = slope/6; mean and standard error over the segments."""
+    """D (1e-5 cm^2/s) from the oxygens' mean-squared displacement: in each of `segments` equal time segments,
+    the slope over lags of 20-60 % of it (all time origins), D = slope/6; mean and standard error."""
     t = np.asarray(times) - times[0]
     x = np.asarray(oxygens)  # frames x molecules x 3, unwrapped
     values = []
@@ -58,7 +47,6 @@ def run_series(method, step_fs, ps, start, system, bodies, threads, sample_fs=SA
     oxygen = [body[0] for body in bodies]
     stride = max(1, int(round(sample_fs / step_fs)))
     series = {key: [] for key in ('time', 'kinetic', 'potential', 'conserved', 'Ttrans', 'Trot', 'density')}
-    grams = masses.sum() * DALTON_GRAMS
     oxygens = []
     began = time.time()
     for _ in range(int(round(ps * 1000 / (stride * step_fs)))):
@@ -66,20 +54,17 @@ def run_series(method, step_fs, ps, start, system, bodies, threads, sample_fs=SA
         state = context.getState(getEnergy=True, getVelocities=not rigid, getPositions=keep_oxygens)
         kinetic = state.getKineticEnergy().value_in_unit(unit.kilojoule_per_mole)
         potential = state.getPotentialEnergy().value_in_unit(unit.kilojoule_per_mole)
-        series['time'].append(state.getTime().value_in_unit(unit.picosecond))
-        series['kinetic'].append(kinetic)
-        series['potential'].append(potential)
-        series['conserved'].append(kinetic + potential + (bath().value_in_unit(unit.kilojoule_per_mole) if bath else 0))
-        a, b, c = state.getPeriodicBoxVectors(asNumpy=True).value_in_unit(unit.nanometer)
-        series['density'].append(grams / (a[0] * b[1] * c[2] * 1e-21))  # g/mL; the box is rectangular
         if rigid:
-            series['Ttrans'].append(integrator.computeTranslationalTemperature().value_in_unit(unit.kelvin))
-            series['Trot'].append(integrator.computeRotationalTemperature().value_in_unit(unit.kelvin))
+            split = (integrator.computeTranslationalTemperature().value_in_unit(unit.kelvin),
+                     integrator.computeRotationalTemperature().value_in_unit(unit.kelvin))
         else:  # its half-step velocities, as LangevinMiddle reports them
-            v = state.getVelocities(asNumpy=True).value_in_unit(unit.nanometer / unit.picosecond)
-            ttrans, trot = temperatures(v, masses, bodies, True)
-            series['Ttrans'].append(ttrans)
-            series['Trot'].append(trot)
+            split = temperatures(state.getVelocities(asNumpy=True).value_in_unit(unit.nanometer / unit.picosecond),
+                                 masses, bodies, True)
+        for key, value in (('time', state.getTime().value_in_unit(unit.picosecond)), ('kinetic', kinetic),
+                           ('potential', potential), ('Ttrans', split[0]), ('Trot', split[1]),
+                           ('conserved', kinetic + potential + (bath().value_in_unit(unit.kilojoule_per_mole) if bath else 0)),
+                           ('density', density(state, masses))):
+            series[key].append(value)
         if keep_oxygens:
             oxygens.append(state.getPositions(asNumpy=True).value_in_unit(unit.nanometer)[oxygen])
         if not math.isfinite(series['conserved'][-1]):
@@ -93,24 +78,24 @@ CSV_COLUMNS = ['method', 'step_fs', 'ps', 'kinetic_mean', 'kinetic_mean_se', 'ki
 STEPS_FS = (2, 0.5, 1, 3, 4, 5)
 
 
-def run(quick, out, log, threads=1):
-    """Every run; out + '.csv' gets a row per run as it ends; returns the report as markdown lines."""
-    production_ps, short_ps, equilibrate_ps = (0.2, 0.1, 0.05) if quick else (20.0, 2.0, 2.0)
-    began = time.time()
-    system, positions, bodies = water()
-    log('thermostats: equilibrating %g ps (LangevinMiddle + SETTLE, 2 fs)' % equilibrate_ps)
-    start = equilibrate(system, positions, equilibrate_ps, threads)
+def runs(name, out, columns, plan, make_row, log):
+    """A row per (method, step) of the plan, from make_row; out + '.csv' rewritten as each run ends."""
     rows = []
-    for method in METHODS:
-        for step_fs in STEPS_FS:
-            if method == 'LangevinMiddle + SETTLE' and step_fs != 2:
-                continue
-            row = run_one(method, step_fs, production_ps if step_fs == 2 else short_ps, start, system, bodies, threads)
-            log('thermostats: %s' % row)
-            rows.append(row)
-            write_csv(out + '.csv', rows, CSV_COLUMNS)
-    return report(rows, len(bodies), quick, production_ps, short_ps, equilibrate_ps, threads,
-                  (time.time() - began) / 60)
+    for method, step_fs in plan:
+        rows.append(make_row(method, step_fs))
+        log('%s: %s' % (name, rows[-1]))
+        write_csv(out + '.csv', rows, columns)
+    return rows
+
+
+def run(quick, out, log, threads=1):
+    """Every run (a row each in out + '.csv'); returns the report as markdown lines."""
+    production_ps, short_ps, equilibrate_ps = (0.2, 0.1, 0.05) if quick else (20.0, 2.0, 2.0)
+    system, positions, bodies = water()
+    start = equilibrate(system, positions, equilibrate_ps, threads)
+    rows = runs('thermostats', out, CSV_COLUMNS, [(m, h) for m in METHODS for h in STEPS_FS if h == 2 or m != METHODS[3]],
+                lambda m, h: run_one(m, h, production_ps if h == 2 else short_ps, start, system, bodies, threads), log)
+    return report(rows, len(bodies), quick, production_ps, short_ps, equilibrate_ps, threads)
 
 
 STEP_SIZE_METHODS = METHODS[1:]  # the sampling ones
@@ -124,17 +109,12 @@ STEP_SIZE_RUNS = [(m, h) for h in (1.5, 1, 0.5) for m in STEP_SIZE_METHODS if h 
 
 
 def run_step_sizes(quick, out, log, threads=1, ps=20.0):
-    """The potential energy's step-size dependence (NVT): STEP_SIZE_RUNS for `ps` each from the main run's
-    start (rows to out + '.csv')."""
+    """The potential energy's step-size dependence (NVT): STEP_SIZE_RUNS for `ps` each from the main run's start."""
     ps, equilibrate_ps = (0.2, 0.05) if quick else (ps, 2.0)
     system, positions, bodies = water()
     start = equilibrate(system, positions, equilibrate_ps, threads)
-    rows = []
-    for method, step_fs in STEP_SIZE_RUNS:
-        rows.append(run_one(method, step_fs, ps, start, system, bodies, threads, production=True))
-        log('thermostats step sizes: %s' % rows[-1])
-        write_csv(out + '.csv', rows, CSV_COLUMNS)
-    return rows
+    return runs('thermostats step sizes', out, CSV_COLUMNS, STEP_SIZE_RUNS,
+                lambda m, h: run_one(m, h, ps, start, system, bodies, threads, production=True), log)
 
 
 DENSITY_COLUMNS = ['method', 'step_fs', 'ps', 'discarded_ps', 'density', 'density_se', 'potential_per_molecule',
@@ -143,35 +123,28 @@ DENSITY_EQUILIBRATE_PS = 10.0
 
 
 def run_density(quick, out, log, threads=1, ps=40.0, discard_ps=4.0, equilibrate_ps=DENSITY_EQUILIBRATE_PS):
-    """NPT (MonteCarloBarostat, 1 bar, 300 K): each thermostat and LangevinMiddle + SETTLE at 2 fs from one
-    start (equilibrate_ps of LangevinMiddle + SETTLE under the barostat), discard_ps dropped, then ps
-    sampled every 10 fs: the mean density and potential energy per water with block standard errors.
-    Rows to out + '.csv'."""
+    """NPT (MonteCarloBarostat, 1 bar, 300 K): each thermostat and LangevinMiddle + SETTLE at 2 fs from one start
+    (equilibrate_ps under the barostat), discard_ps dropped, then ps sampled: density, U per water and T."""
     if quick:
         ps, discard_ps, equilibrate_ps = 0.2, 0.02, 0.05
     system, positions, bodies = water(barostat_seed=7)
-    log('thermostats NPT: equilibrating %g ps (LangevinMiddle + SETTLE, 2 fs, barostat)' % equilibrate_ps)
     start = equilibrate(system, positions, equilibrate_ps, threads)
     dof = 6 * len(bodies) - 3
-    rows = []
-    for method in STEP_SIZE_METHODS:
-        row = dict(method=method, step_fs=2, ps=ps, discarded_ps=discard_ps)
+
+    def row(method, step_fs):
+        row = dict(method=method, step_fs=step_fs, ps=ps, discarded_ps=discard_ps)
         try:
-            series, _, wall = run_series(method, 2, discard_ps + ps, start, system, bodies, threads)
+            series, _, wall = run_series(method, step_fs, discard_ps + ps, start, system, bodies, threads)
         except Exception as error:  # a blow-up is a result
-            row['failure'] = str(error).splitlines()[0]
-        else:
-            kept = len(series['time']) - int(round(ps * 1000 / SAMPLE_FS))
-            row['density'], row['density_se'] = block_mean(series['density'][kept:], BLOCKS)
-            u, u_se = block_mean(series['potential'][kept:], BLOCKS)
-            row['potential_per_molecule'], row['potential_per_molecule_se'] = u / len(bodies), u_se / len(bodies)
-            k, k_se = block_mean(series['kinetic'][kept:], BLOCKS)
-            row['T'], row['T_se'] = 2 * k / (dof * KB), 2 * k_se / (dof * KB)
-            row['wall_s'] = round(wall)
-        rows.append(row)
-        log('thermostats NPT: %s' % row)
-        write_csv(out + '.csv', rows, DENSITY_COLUMNS)
-    return rows
+            return dict(row, failure=str(error).splitlines()[0])
+        kept = len(series['time']) - int(round(ps * 1000 / SAMPLE_FS))
+        row['density'], row['density_se'] = block_mean(series['density'][kept:], BLOCKS)
+        u, u_se = block_mean(series['potential'][kept:], BLOCKS)
+        row['potential_per_molecule'], row['potential_per_molecule_se'] = u / len(bodies), u_se / len(bodies)
+        k, k_se = block_mean(series['kinetic'][kept:], BLOCKS)
+        row['T'], row['T_se'] = 2 * k / (dof * KB), 2 * k_se / (dof * KB)
+        return dict(row, wall_s=round(wall))
+    return runs('thermostats NPT', out, DENSITY_COLUMNS, [(m, 2) for m in STEP_SIZE_METHODS], row, log)
 
 
 def run_one(method, step_fs, ps, start, system, bodies, threads, production=None):
@@ -182,24 +155,24 @@ def run_one(method, step_fs, ps, start, system, bodies, threads, production=None
         series, oxygens, wall = run_series(method, step_fs, ps, start, system, bodies, threads, keep_oxygens=production)
     except Exception as error:  # a blow-up is a result
         return dict(method=method, step_fs=step_fs, ps=ps, failure=str(error).splitlines()[0])
-    row = dict(method=method, step_fs=step_fs, ps=ps, wall_s=round(wall))
+    row, n = dict(method=method, step_fs=step_fs, ps=ps, wall_s=round(wall)), len(bodies)
     if method not in ('LangevinMiddle + SETTLE', M_RATTLE_LANGEVIN):  # they conserve nothing
         drift, drift_se = drift_with_error(series['time'], series['conserved'])
-        row['drift_kJ_per_mol_ns_per_molecule'], row['drift_se'] = drift / len(bodies), drift_se / len(bodies)
+        row['drift_kJ_per_mol_ns_per_molecule'], row['drift_se'] = drift / n, drift_se / n
     for key in ('Ttrans', 'Trot'):
         row[key], row[key + '_se'] = block_mean(series[key], BLOCKS)
     if production:
         row['kinetic_mean'], row['kinetic_mean_se'] = block_mean(series['kinetic'], BLOCKS)
-        row['kinetic_variance'], row['kinetic_variance_se'] = block_variance(series['kinetic'])
-        mean_potential, se_potential = block_mean(series['potential'], BLOCKS)
-        row['potential_per_molecule'], row['potential_per_molecule_se'] = (mean_potential / len(bodies),
-                                                                           se_potential / len(bodies))
+        # The variance: the squared deviations from the whole run's mean, block-averaged.
+        kinetic = np.asarray(series['kinetic'], float)
+        row['kinetic_variance'], row['kinetic_variance_se'] = block_mean((kinetic - kinetic.mean()) ** 2, BLOCKS)
+        u, u_se = block_mean(series['potential'], BLOCKS)
+        row['potential_per_molecule'], row['potential_per_molecule_se'] = u / n, u_se / n
         row['D_1e-5_cm2_per_s'], row['D_se'] = diffusion(series['time'], oxygens)
     return row
 
 
-def report(rows, molecules, quick, production_ps, short_ps, equilibrate_ps, threads, minutes, step_rows=None,
-           density_rows=None):
+def report(rows, molecules, quick, production_ps, short_ps, equilibrate_ps, threads, step_rows=None, density_rows=None):
     """The section: the main run's rows, and the follow-up studies' (step sizes, density) where given."""
     dof = 6 * molecules - 3
     kT = KB * TEMPERATURE
@@ -212,20 +185,10 @@ def report(rows, molecules, quick, production_ps, short_ps, equilibrate_ps, thre
         return '%+.1f' % ((row[key] - target) / row[se]) if key in row and row[se] > 0 else '-'
 
     md = ['\n## Thermostats for rigid water: Nose-Hoover chain and CSVR (issue 33)\n',
-          'OpenMM\'s `app/data/tip3p.pdb` (%d waters, `amber14/tip3p.xml`, PME 0.9 nm, a CMMotionRemover), CPU '
-          'platform with %d thread(s), each water at TIP3P\'s exact geometry; every run starts from one state: %g ps '
-          'of LangevinMiddle + SETTLE at 300 K (1/ps, 2 fs). `MRattleNoseHooverIntegrator` (10/ps, chain of 3, 3 '
-          'sub-steps, Yoshida-Suzuki order 7) and `MRattleBussiIntegrator` (10/ps) at 300 K, beside '
-          '`MRattleIntegrator` (NVE) and `LangevinMiddleIntegrator` + SETTLE (1/ps). %g ps at 2 fs per method, '
-          'sampled every 10 fs; %g ps at the other steps. Means +- standard errors from %d blocks; a variance\'s '
-          'error from the blocks\' mean squared deviations from the run\'s mean. N = %d degrees of freedom: the canonical kinetic '
-          'energy has mean N kT/2 = %.1f kJ/mol and variance N (kT)^2/2 = %.0f (kJ/mol)^2. Diffusion: the '
-          'oxygens\' mean-squared displacement in each quarter of the 2-fs run, over lags of 20-60%% of it (all '
-          'time origins), D = slope/6, mean +- SE over the quarters (no finite-size correction). Drift: least-squares slope of the '
-          'conserved quantity (kinetic + potential + `computeHeatBathEnergy()`; NVE: the total energy), '
-          'kJ/mol/ns per water, its error inflated by the residuals\' statistical inefficiency '
-          '(`benchmarks/python/suite/thermostats.py`, %.0f minutes).%s\n'
-          % (molecules, threads, equilibrate_ps, production_ps, short_ps, BLOCKS, dof, mean_k, variance_k, minutes,
+          '%d waters, CPU platform with %d thread(s), one start (%g ps of LangevinMiddle + SETTLE); %g ps at 2 fs, %g ps '
+          'at the other steps; %d blocks. N = %d degrees of freedom: canonical <K> = N kT/2 = %.1f kJ/mol, '
+          'var K = N (kT)^2/2 = %.0f (kJ/mol)^2. The method: `docs/benchmarks.md`, "Thermostats".%s\n'
+          % (molecules, threads, equilibrate_ps, production_ps, short_ps, BLOCKS, dof, mean_k, variance_k,
              ' **Quick smoke run: too short to conclude anything.**' if quick else '')]
     md.append('### Canonical sampling at 2 fs\n')
     md.append('| Method | <K> (kJ/mol) | (<K> - canonical)/SE | var K ((kJ/mol)^2) | (var - canonical)/SE | '
@@ -244,8 +207,6 @@ def report(rows, molecules, quick, production_ps, short_ps, equilibrate_ps, thre
             pm(row, 'potential_per_molecule', 'potential_per_molecule_se', 3), pm(row, 'D_1e-5_cm2_per_s', 'D_se', 2),
             pm(row, 'Ttrans', 'Ttrans_se'), pm(row, 'Trot', 'Trot_se')))
     md.append('\n### Conserved quantity against the step size\n')
-    md.append('The translational and rotational temperatures at these steps are in the equipartition table '
-              '(section "Equipartition of rigid water against step size"), from runs of their own.\n')
     md.append('| Method | Step (fs) | Run (ps) | Drift (kJ/mol/ns per water) |')
     md.append('|---|---|---|---|')
     for row in sorted(rows, key=lambda r: (METHODS.index(r['method']) if r['method'] in METHODS else 99, r['step_fs'])):
@@ -274,10 +235,7 @@ def report_step_sizes(rows, dof, kT):
     its steps (its configurational sampling is accurate at any step: its own fit below checks that)."""
     reference = pooled([r for r in rows if r['method'] == 'LangevinMiddle + SETTLE' and 'potential_per_molecule' in r])
     md = ['\n### Potential energy against the step size (NVT)\n',
-          'Each run from the start above, sampled every 10 fs; the 2-fs rows are the production runs above. '
-          'T: the kinetic energy\'s mean as a temperature, 2 <K>/(N k). The reference is LangevinMiddle + SETTLE\'s U '
-          'per water pooled over its steps (inverse-variance weighted mean): %.3f +- %.3f kJ/mol. The last column: '
-          'U per water minus the reference, +- the two standard errors combined (in those errors).\n' % reference,
+          'The reference, LangevinMiddle + SETTLE\'s U per water pooled over its steps: %.3f +- %.3f kJ/mol.\n' % reference,
           '| Method | Step (fs) | Run (ps) | T (K) | U per water (kJ/mol) | U - reference (kJ/mol) |', '|---|---|---|---|---|---|']
     order = {m: k for k, m in enumerate(STEP_SIZE_METHODS + (M_RATTLE_LANGEVIN,))}
     for r in sorted(rows, key=lambda r: (order[r['method']], -r['step_fs'])):
@@ -306,8 +264,7 @@ def report_step_sizes(rows, dof, kT):
             fits.append('%s: U(0) = %.3f +- %.3f, c = %+.4f +- %.4f kJ/mol/fs^2 (%+.1f SE; chi^2 %.1f for %d)' % (
                 method, u0, u0_se, c, c_se, c / c_se, chi2, dof_fit))
     if fits:
-        md.append('\nWeighted least-squares fits U per water = U(0) + c h^2 (h in fs; the errors from the fit\'s '
-                  'covariance, not rescaled by chi^2): ' + '; '.join(fits) + '.')
+        md.append('\nWeighted least-squares fits U per water = U(0) + c h^2 (h in fs): ' + '; '.join(fits) + '.')
     return md
 
 
@@ -336,11 +293,8 @@ def report_density(rows):
     reference = [r for r in rows if r['method'] == 'LangevinMiddle + SETTLE' and 'density' in r]
     first = rows[0]
     md = ['\n### Density under a barostat (NPT, 2 fs)\n',
-          'OpenMM\'s MonteCarloBarostat (1 bar, 300 K, every 25 steps, seeded) added to the System above; one start: '
-          '%g ps of LangevinMiddle + SETTLE under the barostat from the PDB\'s box; each method then drops %g ps '
-          'and samples every 10 fs for %g ps. Density from the box volume and the total mass; means +- standard '
-          'errors from %d blocks; differences from LangevinMiddle + SETTLE\'s +- the combined error (in those '
-          'errors).\n' % (DENSITY_EQUILIBRATE_PS, first['discarded_ps'], first['ps'], BLOCKS),
+          'One start (%g ps under the barostat); %g ps dropped, %g ps sampled; %d blocks.\n' % (
+              DENSITY_EQUILIBRATE_PS, first['discarded_ps'], first['ps'], BLOCKS),
           '| Method | Density (g/mL) | - LangevinMiddle + SETTLE\'s (g/mL) | U per water (kJ/mol) | T (K) |',
           '|---|---|---|---|---|']
     for r in rows:
@@ -360,24 +314,14 @@ def report_density(rows):
 
 def validate(args, quick, out, log):
     """`./benchmarks/run.sh validate-thermostats`: the main runs (or, --report-from, their CSV reported), or one
-    follow-up study (--study: step sizes and density write their CSVs, out + '_<study>.csv', which the main report
-    reads beside its own; equipartition its rows of that table). Returns the section's markdown lines."""
-    if args.study == 'step-sizes':
-        run_step_sizes(quick, out + '_step_sizes', log, args.threads)
+    follow-up study (--study: its CSV, out + '_<study>.csv', which the main report reads beside its own)."""
+    if args.study:
+        (run_step_sizes if args.study == 'step-sizes' else run_density)(
+            quick, out + '_' + args.study.replace('-', '_'), log, args.threads)
         return []
-    if args.study == 'density':
-        run_density(quick, out + '_density', log, args.threads)
-        return []
-    if args.study == 'equipartition':
-        if args.report_from:
-            return equipartition.report(read_csv(args.report_from),
-                                        {'TIP3P': equipartition.MOLECULES, 'SPC/E': equipartition.MOLECULES}, False,
-                                        *equipartition.LENGTHS, args.threads)
-        return equipartition.run(quick, os.path.join(os.path.dirname(out), 'equipartition'), log, args.threads,
-                                 methods=equipartition.THERMOSTATS)
     if args.report_from:
         stem = args.report_from[:-len('.csv')]
         beside = [read_csv(stem + suffix) if os.path.exists(stem + suffix) else None
                   for suffix in ('_step_sizes.csv', '_density.csv')]
-        return report(read_csv(args.report_from), 895, False, 20.0, 2.0, 2.0, 1, 0.0, *beside)
+        return report(read_csv(args.report_from), 895, False, 20.0, 2.0, 2.0, 1, *beside)
     return run(quick, out, log, args.threads)
