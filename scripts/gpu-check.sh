@@ -7,8 +7,9 @@
 #       the C++ test programs and benchmarks/cpp/device_speed; refuses if that is over 60 MiB.
 #   scripts/gpu-check.sh run                 on the GPU machine, from the repository root with
 #       .gpu/ carried, within 8 minutes: the device test first (120 s), then device_speed
-#       (mixed precision, TIP3P boxes of 24,000, 98,304 and 985,527 atoms, bare and PME), one
-#       process per group under a hard limit, then the other tests' CUDA cases with what is
+#       (mixed precision, TIP3P boxes of 24,000, 98,304 and 985,527 atoms, bare and PME; the
+#       thermostats and ten large bodies bare at the first two sizes), one process per group
+#       under a hard limit, then the other tests' CUDA cases with what is
 #       left. Writes two files to $OUT (the device tool's output folder), else .gpu/out:
 #       gpu-check.tar.gz (everything) and gpu-check-summary.txt. Where there is no CUDA device
 #       (no driver, or none that nvidia-smi sees) it says so in both, runs nothing and exits 3.
@@ -136,28 +137,32 @@ run_check() {
     timeout 120 "$stage/bin/TestDevicePlatforms" --gtest_filter='*CUDA*' > "$work/TestDevicePlatforms.txt" 2>&1 || status=$?
     echo "TestDevicePlatforms: exit $status$([ "$status" = 124 ] && echo ' (cut at 120 s)')" | tee "$work/summary.txt"
 
-    # 2. device_speed, one process per (size, System) group under a hard limit, so that every
-    #    group writes its rows or is named as cut: 24,000 and 98,304 atoms 45 s each, 985,527
-    #    atoms 75 s each, while time is left.
+    # 2. device_speed, one process per (size, System, integrators) group under a hard limit, so
+    #    that every group writes its rows or is named as cut: first the integration alone (bare)
+    #    of all eight (the thermostats against NoseHoover + SETTLE, ten large bodies against the
+    #    same atoms as waters) at 24,000 and 98,304 atoms, 60 s each; then Verlet, LangevinMiddle
+    #    and their M-RATTLE counterparts with PME there (45 s each) and at 985,527 atoms (75 s
+    #    each), while time is left.
     echo "== device_speed (mixed precision) =="
-    local n system limit
-    for n in 20 32 69; do
-        for system in bare pme; do
-            limit=45
-            [ "$n" = 69 ] && limit=75
-            if [ "$(left)" -lt $((limit + 60)) ]; then
-                echo "device_speed $n^3 waters $system: not started, $(left) s left" | tee -a "$work/summary.txt"
-                continue
-            fi
-            status=0
-            timeout "$limit" "$stage/bin/device_speed" --platform CUDA --precision mixed \
-                --plugins "$stage/lib/libMRattlePluginCUDA.so" --waters-per-side "$n" --systems "$system" \
-                --out "$work/device_speed-$n-$system.csv" --ratios "$work/device_speed-$n-$system-ratios.csv" \
-                2> "$work/device_speed-$n-$system.log" || status=$?
-            echo "device_speed $n^3 waters $system: exit $status$([ "$status" = 124 ] && echo " (cut at $limit s)")" \
-                | tee -a "$work/summary.txt"
-            cat "$work/device_speed-$n-$system-ratios.csv" 2>/dev/null | tail -n +2 | tee -a "$work/summary.txt" || true
-        done
+    local n system integrators limit group
+    local base=verlet_settle,mrattle,langevin_settle,mrattle_langevin
+    for group in "20 bare all 60" "32 bare all 60" "20 pme $base 45" "32 pme $base 45" "69 bare $base 75" \
+                 "69 pme $base 75"; do
+        read -r n system integrators limit <<< "$group"
+        [ "$integrators" = all ] && integrators=""
+        if [ "$(left)" -lt $((limit + 60)) ]; then
+            echo "device_speed $n^3 waters $system: not started, $(left) s left" | tee -a "$work/summary.txt"
+            continue
+        fi
+        status=0
+        timeout "$limit" "$stage/bin/device_speed" --platform CUDA --precision mixed \
+            --plugins "$stage/lib/libMRattlePluginCUDA.so" --waters-per-side "$n" --systems "$system" \
+            ${integrators:+--integrators "$integrators"} \
+            --out "$work/device_speed-$n-$system.csv" --ratios "$work/device_speed-$n-$system-ratios.csv" \
+            2> "$work/device_speed-$n-$system.log" || status=$?
+        echo "device_speed $n^3 waters $system: exit $status$([ "$status" = 124 ] && echo " (cut at $limit s)")" \
+            | tee -a "$work/summary.txt"
+        cat "$work/device_speed-$n-$system-ratios.csv" 2>/dev/null | tail -n +2 | tee -a "$work/summary.txt" || true
     done
 
     # 3. The other test programs' CUDA cases with what is left, four at a time.

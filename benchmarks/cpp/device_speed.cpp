@@ -3,8 +3,10 @@
 // C++ so that it runs where there is no Python OpenMM. Exit 2: a run diverged or lost its geometry;
 // 3: the platform or the plugin's kernels on it are not there.
 #include "MRattleBuildInfo.h"
+#include "MRattleBussiIntegrator.h"
 #include "MRattleIntegrator.h"
 #include "MRattleLangevinIntegrator.h"
+#include "MRattleNoseHooverIntegrator.h"
 #include "OpenMM.h"
 #include <algorithm>
 #include <chrono>
@@ -48,7 +50,7 @@ vector<string> split(const string& text) {
 struct Options {
     string platform = "CUDA", precision = "mixed", out, ratios;
     vector<int> watersPerSide = {20, 32, 69};  // 24,000, 98,304 and 985,527 atoms
-    vector<string> plugins, systems = {"bare", "pme"};
+    vector<string> plugins, systems = {"bare", "pme"}, integrators;  // integrators: all of Compared if empty
     int repeats = 3, warmup = 20;
     double batchSeconds = 0.5;
 };
@@ -72,7 +74,8 @@ Options parse(int argc, char** argv) {
         const string value = argv[++i];
         std::map<string, string*> texts = {{"--platform", &options.platform}, {"--precision", &options.precision},
                                            {"--out", &options.out}, {"--ratios", &options.ratios}};
-        std::map<string, vector<string>*> lists = {{"--plugins", &options.plugins}, {"--systems", &options.systems}};
+        std::map<string, vector<string>*> lists = {
+            {"--plugins", &options.plugins}, {"--systems", &options.systems}, {"--integrators", &options.integrators}};
         if (texts.count(flag))
             *texts[flag] = value;
         else if (lists.count(flag))
@@ -208,17 +211,49 @@ std::unique_ptr<System> buildSystem(const WaterBox& box, bool pme) {
     return system;
 }
 
+/**
+ * Each timed integrator, the one its time is compared with and the target of that ratio (bare
+ * systems: integration time at most this; PME: ns/day at least 0.95x). "mrattle_large_bodies"
+ * groups the waters into ten bodies of up to LargeBodyWaters waters: against the same atoms
+ * as 3-atom bodies, the cost of large bodies per atom.
+ */
+struct Compared {
+    string name, against;
+    double target;
+};
+const vector<Compared> Comparisons = {
+    {"verlet_settle", "", 0},          {"mrattle", "verlet_settle", 1.2},
+    {"langevin_settle", "", 0},        {"mrattle_langevin", "langevin_settle", 1.2},
+    {"nosehoover_settle", "", 0},      {"mrattle_nosehoover", "nosehoover_settle", 1.3},
+    {"mrattle_bussi", "nosehoover_settle", 1.3}, {"mrattle_large_bodies", "mrattle", 1.5}};
+const int LargeBodyWaters = 333;
+
 std::unique_ptr<Integrator> makeIntegrator(const string& name, int waters) {
     if (name == "verlet_settle")
         return std::unique_ptr<Integrator>(new VerletIntegrator(StepSize));
     if (name == "langevin_settle")
         return std::unique_ptr<Integrator>(new LangevinMiddleIntegrator(300, 1, StepSize));
+    if (name == "nosehoover_settle")
+        return std::unique_ptr<Integrator>(new NoseHooverIntegrator(300, 10, StepSize));
     MRattlePlugin::RigidBodyIntegrator* rigid;
-    if (name == "mrattle")
+    if (name == "mrattle_langevin")
+        rigid = new MRattlePlugin::MRattleLangevinIntegrator(300, 1, StepSize);
+    else if (name == "mrattle_nosehoover")
+        rigid = new MRattlePlugin::MRattleNoseHooverIntegrator(300, 10, StepSize);
+    else if (name == "mrattle_bussi")
+        rigid = new MRattlePlugin::MRattleBussiIntegrator(300, 10, StepSize);
+    else if (name == "mrattle" || name == "mrattle_large_bodies")
         rigid = new MRattlePlugin::MRattleIntegrator(StepSize);
     else
-        rigid = new MRattlePlugin::MRattleLangevinIntegrator(300, 1, StepSize);
-    for (int w = 0; w < waters; w++)
+        throw std::runtime_error("device_speed: unknown integrator " + name);
+    const int perBody = std::min(LargeBodyWaters, waters / 10), grouped = name == "mrattle_large_bodies" ? 10 * perBody : 0;
+    for (int first = 0; first < grouped; first += perBody) {
+        vector<int> body;
+        for (int w = first; w < first + perBody; w++)
+            body.insert(body.end(), {3 * w, 3 * w + 1, 3 * w + 2});
+        rigid->addRigidBody(body);
+    }
+    for (int w = grouped; w < waters; w++)
         rigid->addRigidBody({3 * w, 3 * w + 1, 3 * w + 2});
     return std::unique_ptr<Integrator>(rigid);
 }
@@ -335,7 +370,11 @@ int main(int argc, char** argv) {
         out << "platform,device,precision,system,waters,atoms,integrator,steps_per_batch,batches,sync_ms,"
                "median_ms_per_step,min_ms_per_step,max_ms_per_step,ns_per_day,geometry_error_nm,finite\n";
         ratios << "system,atoms,measure,value,target,met,paired_ratio,ci95_low,ci95_high\n";
-        const vector<string> names = {"verlet_settle", "mrattle", "langevin_settle", "mrattle_langevin"};
+        vector<string> names;
+        for (const Compared& compared : Comparisons)
+            if (options.integrators.empty() ||
+                std::count(options.integrators.begin(), options.integrators.end(), compared.name))
+                names.push_back(compared.name);
         bool allGood = true;
         string device = "?";
         std::cerr << "device_speed: OpenMM " << Platform::getOpenMMVersion() << ", " << options.platform << ", "
@@ -397,17 +436,23 @@ int main(int argc, char** argv) {
                         << (m > 0 ? StepSize * 1e-3 * 86400 / m : INFINITY) << "," << std::setprecision(3) << error
                         << "," << (finite ? "yes" : "no") << std::endl;
                 }
-                // The targets: integration (bare) at most 1.2x SETTLE's time; ns/day with PME at
-                // least 0.95x OpenMM's (time ratio at most 1/0.95).
-                for (int mine : {1, 3}) {  // names[mine] against names[mine - 1]
-                    const vector<double>& a = runs[mine].secondsPerStep, &b = runs[mine - 1].secondsPerStep;
+                // The targets: integration (bare) at most the pair's target times the other's
+                // time; ns/day with PME at least 0.95x the other's (time ratio at most 1/0.95).
+                for (const Compared& compared : Comparisons) {
+                    const auto mine = std::find(names.begin(), names.end(), compared.name);
+                    const auto other = std::find(names.begin(), names.end(), compared.against);
+                    if (mine == names.end() || other == names.end())
+                        continue;
+                    const vector<double>& a = runs[mine - names.begin()].secondsPerStep;
+                    const vector<double>& b = runs[other - names.begin()].secondsPerStep;
                     const double ratio = median(a) / median(b), value = pme ? 1 / ratio : ratio;
-                    const string measure = names[mine] + (pme ? " ns/day over " : " time per step over ") + names[mine - 1];
-                    const bool met = pme ? value >= 0.95 : value <= 1.2;
+                    const string measure = compared.name + (pme ? " ns/day over " : " time per step over ") + compared.against;
+                    const bool met = pme ? value >= 0.95 : value <= compared.target;
                     const PairedRatio paired = pairedRatio(a, b, pme);
                     ratios << systemName << "," << atoms << "," << measure << "," << std::setprecision(3) << value
-                           << "," << (pme ? ">= 0.95" : "<= 1.2") << "," << (met ? "yes" : "no") << ","
-                           << paired.ratio << "," << paired.low << "," << paired.high << std::endl;
+                           << "," << (pme ? ">= 0.95" : "<= " + std::to_string(compared.target).substr(0, 3)) << ","
+                           << (met ? "yes" : "no") << "," << paired.ratio << "," << paired.low << "," << paired.high
+                           << std::endl;
                 }
             }
         }
