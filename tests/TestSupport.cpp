@@ -180,9 +180,8 @@ const std::vector<IntegratorTraits>& integrators() {
          [](RigidBodyIntegrator& integrator) {
              return dynamic_cast<MRattleBussiIntegrator&>(integrator).computeHeatBathEnergy();
          }},
-        // Reference and CPU only (the device platforms refuse it); the generic suites' Systems
-        // have no DrudeForce, where it is MRattleLangevin with its own draws.
-        {"MRattleDrudeLangevin", false, true, false, true, false,
+        // The generic suites' Systems have no DrudeForce, where it is MRattleLangevin with its own draws.
+        {"MRattleDrudeLangevin", false, true, true, true, false,
          maker<MRattleDrudeLangevinIntegrator>([](auto make, double h) {
              auto* drude = make(300.0, 1.0, 1.0, 20.0, h);
              drude->setRandomNumberSeed(2024);

@@ -99,6 +99,20 @@ private:
     int argumentRandomIndex, argumentDof, argumentKT, argumentC;
 };
 
+/**
+ * MRattleDrudeLangevinIntegrator: MRattleLangevinIntegrator's step with the noise split between
+ * the Drude groups' rigid motion and their Drude particles' relative motion (the state's
+ * Drude phases), and the hard wall after the drift.
+ */
+class CommonIntegrateMRattleDrudeLangevinStepKernel : public CommonStepKernel {
+public:
+    using CommonStepKernel::CommonStepKernel;
+    /** The Drude groups (a Drude particle in a body is refused here) and OpenMM's device random numbers. */
+    void initialize(const OpenMM::System& system, const RigidBodyTopology& topology,
+                    const RigidBodyIntegrator& integrator) override;
+    void execute(OpenMM::ContextImpl& context, const RigidBodyIntegrator& integrator, bool& forcesAreValid) override;
+};
+
 } // namespace MRattlePlugin
 
 #endif

@@ -218,6 +218,9 @@ void CommonRigidBodyState::mapAtoms() {
     upload(systemBodyAtoms, bodyAtoms);
     upload(systemClusterAtoms, clusterAtoms);
     upload(systemFreeAtoms, freeAtoms);
+    upload(systemDrudeGroupAtoms, drudeGroupAtoms);
+    upload(systemUngroupedAtoms, ungroupedAtoms);
+    upload(systemDrudePairAtoms, drudePairAtoms);
     if (!systemConstraintAtoms.empty()) {
         vector<mm_int2> atoms(systemConstraintAtoms.size() / 2);
         for (size_t k = 0; k < atoms.size(); k++)
