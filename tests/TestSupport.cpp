@@ -193,9 +193,9 @@ const std::vector<IntegratorTraits>& integrators() {
              drude.setDrudeFriction(0);
          },
          nullptr, true},
-        // Reference and CPU only; without a DrudeForce its Drude chain rests and it is
-        // MRattleNoseHoover with the body chain on all degrees of freedom.
-        {"MRattleDrudeNoseHoover", false, false, false, true, true,   // 300 K, 10/ps; Drude 1 K, 20/ps
+        // Without a DrudeForce its Drude chain rests and it is MRattleNoseHoover with the body
+        // chain on all degrees of freedom.
+        {"MRattleDrudeNoseHoover", false, false, true, true, true,   // 300 K, 10/ps; Drude 1 K, 20/ps
          maker<MRattleDrudeNoseHooverIntegrator>([](auto make, double h) { return make(300.0, 10.0, 1.0, 20.0, h); }),
          nullptr,
          [](RigidBodyIntegrator& integrator) {

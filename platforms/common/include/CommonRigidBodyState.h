@@ -86,6 +86,13 @@ public:
     void addDrudeNoise(double friction, double temperature, double drudeFriction, double drudeTemperature, double h);
     /** The hard wall after the drift (nothing if maxDistance <= 0); beyond twice it the step fails. */
     void bounceDrudes(double maxDistance, double drudeTemperature, double h);
+    /**
+     * sumKineticEnergy(), and twice each Drude group's KE_C into drudeRelativeEnergies(), for a
+     * two-chain thermostat's kernel (which puts its factors for R and C into velocityScale[0], [1]).
+     */
+    void sumDrudeKineticEnergies();
+    /** Every Drude group's R scaled by velocityScale[0], its C by velocityScale[1]; every other atom by [0]. */
+    void scaleDrudeVelocities();
     /** Virtual sites at the new positions, then the forces there. */
     void computeForces(OpenMM::ContextImpl& context, const RigidBodyIntegrator& integrator, bool& forcesAreValid);
     /** The clock, OpenMM's reordering, and the lazy failure check (a failure found is undone and thrown). */
@@ -122,6 +129,13 @@ public:
      * initialize() with CommonMRattleKernelSources::drude among its sources.
      */
     void setDrudeGroups(const DrudeGroups& groups);
+    /** Twice each Drude group's KE_C, as sumDrudeKineticEnergies() leaves it (one per group). */
+    OpenMM::ComputeArray& drudeRelativeEnergies() {
+        return drudeRelative;
+    }
+    int numDrudeGroups() const {
+        return numDrudeGroupsOnDevice;
+    }
     /** Launch an integrator kernel (made with integratorArguments) in the step's order. */
     void launch(OpenMM::ComputeKernel& kernel, int workItems, int groupSize = -1);
     /** The work-group size of sumKineticEnergy and of an integrator's one-group kernels (REDUCTION_THREADS). */
@@ -287,8 +301,8 @@ private:
     int numDrudeGroupsOnDevice = 0, numUngrouped = 0;
     bool hasDrudeGroups = false;
     OpenMM::ComputeArray drudeGroupStart, drudeGroupAtoms, drudeGroupRotates, ungroupedAtoms, drudePairStart,
-        drudePairAtoms, drudeNoiseField;
-    OpenMM::ComputeKernel drudeNoise, drudeHardWall;
+        drudePairAtoms, drudeNoiseField, drudeRelative;
+    OpenMM::ComputeKernel drudeNoise, drudeHardWall, drudeRelativeEnergy, drudeScale;
     int drudeNoiseArguments, drudeNoiseRandomIndex, drudeWallArguments;
     int advanceBackupIndex, advanceKickTime, advanceProjectAfterKick, advanceDriftTime, advanceTolerance,
         advanceNoiseDecay, advanceNoiseScale, advanceRandomIndex, advanceProjectAtEnd, advanceResetFollows,

@@ -35,6 +35,8 @@ public:
             return new CommonIntegrateMRattleBussiStepKernel(name, platform, cc);
         if (name == IntegratorNames::MRattleDrudeLangevin.stepKernel)
             return new CommonIntegrateMRattleDrudeLangevinStepKernel(name, platform, cc);
+        if (name == IntegratorNames::MRattleDrudeNoseHoover.stepKernel)
+            return new CommonIntegrateMRattleDrudeNoseHooverStepKernel(name, platform, cc);
         // An integrator without a device kernel (the splitting baseline) names where it runs.
         const std::string baseline = name == IntegratorNames::RigidSplitting.stepKernel ? " (the paper's baseline)" : "";
         throw OpenMMException(IntegratorNames::ofStepKernel(name).integrator + baseline + " runs on the " +

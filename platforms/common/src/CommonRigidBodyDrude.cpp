@@ -1,7 +1,8 @@
 /*
  * CommonRigidBodyState: the Drude integrators' phases (kernels/drude.cc), as
  * ReferenceRigidBodyDrude.cpp on the host: the noise split between each Drude group's rigid
- * motion and its Drude particles' relative motion, and the hard wall. One work item per Drude
+ * motion and its Drude particles' relative motion, the hard wall, the kinetic energy of the
+ * relative motion and the scaling of the two parts by two factors. One work item per Drude
  * group (a body with the Drude particles of its cores, or a free core with its own) and per
  * atom in no group.
  */
@@ -51,9 +52,12 @@ void CommonRigidBodyState::setDrudeGroups(const DrudeGroups& groups) {
     drudePairAtoms.initialize<int>(cc, std::max<size_t>(2, systemDrudePairAtoms.size()), "mrattleDrudePairAtoms");
     drudeNoiseField.initialize(cc, cc.getPaddedNumAtoms(), doubleMixed() ? sizeof(mm_double4) : sizeof(mm_float4),
                                "mrattleDrudeNoise");
+    initializeMixedArray(drudeRelative, vector<double>(std::max(1, numDrudeGroupsOnDevice), 0.0), "mrattleDrudeRelative");
     mapAtoms();
     drudeNoise = stepProgram->createKernel("drudeNoise");
     drudeHardWall = stepProgram->createKernel("drudeHardWall");
+    drudeRelativeEnergy = stepProgram->createKernel("drudeRelativeEnergies");
+    drudeScale = stepProgram->createKernel("scaleDrudeVelocities");
     hasDrudeGroups = true;
 }
 
@@ -95,6 +99,12 @@ void CommonRigidBodyState::setDrudeKernelArguments() {
     wall.addMixed(0.0);
     wall.addMixed(0.0);
 
+    Arguments relative = integratorArguments(drudeRelativeEnergy);
+    addDrudeGroupArguments(relative);
+    relative.add(drudeRelative);
+
+    Arguments scale = integratorArguments(drudeScale);
+    addDrudeGroupArguments(scale);
 }
 
 void CommonRigidBodyState::addDrudeNoise(double friction, double temperature, double drudeFriction,
@@ -122,4 +132,16 @@ void CommonRigidBodyState::bounceDrudes(double maxDistance, double drudeTemperat
     setMixedArg(drudeHardWall, drudeWallArguments + 1, BOLTZ * drudeTemperature);
     setMixedArg(drudeHardWall, drudeWallArguments + 2, h);
     launch(drudeHardWall, numDrudeGroupsOnDevice);
+}
+
+void CommonRigidBodyState::sumDrudeKineticEnergies() {
+    sumKineticEnergy();
+    if (numDrudeGroupsOnDevice > 0)
+        launch(drudeRelativeEnergy, numDrudeGroupsOnDevice);
+}
+
+void CommonRigidBodyState::scaleDrudeVelocities() {
+    const int items = numDrudeGroupsOnDevice + numUngrouped;
+    if (items > 0)
+        launch(drudeScale, items);
 }

@@ -142,3 +142,46 @@ KERNEL void drudeHardWall(STATE_ARGUMENTS, int numGroups, GLOBAL const int* REST
                              maxDistance, kTDrude, h))
                 recordFailure(failure, stepIndex);
 }
+
+/** Twice each group's KE_C, sum m |v - R|^2, into relative[group]. */
+KERNEL void drudeRelativeEnergies(STATE_ARGUMENTS, DRUDE_GROUP_ARGUMENTS, GLOBAL mixed* RESTRICT relative) {
+    for (int group = GLOBAL_ID; group < numGroups; group += GLOBAL_SIZE) {
+        const int start = groupStart[group], end = groupStart[group+1];
+        const RigidMotion motion = groupRigidMotion(start, end, groupAtoms, groupRotates[group] != 0, posq,
+                                                    posqCorrection, velm);
+        mixed sum = 0;
+        for (int k = start; k < end; k++) {
+            const int atom = groupAtoms[k];
+            const mixed4 v = velm[atom];
+            const mixed3 c = make_mixed3(v.x, v.y, v.z) - rigidVelocityAt(motion, loadPosition(posq, posqCorrection, atom));
+            sum += dot(c, c)/v.w;
+        }
+        relative[group] = sum;
+    }
+}
+
+/** Each group's R times velocityScale[0] and C times velocityScale[1]; every other atom times velocityScale[0]. */
+KERNEL void scaleDrudeVelocities(STATE_ARGUMENTS, DRUDE_GROUP_ARGUMENTS) {
+    const mixed factor = velocityScale[0], drudeFactor = velocityScale[1];
+    if (failure[0] != 0 || (factor == 1 && drudeFactor == 1))
+        return;  // chains at rest: the velocities as they are, bit for bit
+    for (int item = GLOBAL_ID; item < numGroups + numUngrouped; item += GLOBAL_SIZE) {
+        if (item >= numGroups) {
+            const int atom = ungroupedAtoms[item-numGroups];
+            const mixed4 v = velm[atom];
+            velm[atom] = make_mixed4(factor*v.x, factor*v.y, factor*v.z, v.w);
+            continue;
+        }
+        const int start = groupStart[item], end = groupStart[item+1];
+        const RigidMotion motion = groupRigidMotion(start, end, groupAtoms, groupRotates[item] != 0, posq,
+                                                    posqCorrection, velm);
+        for (int k = start; k < end; k++) {
+            const int atom = groupAtoms[k];
+            const mixed4 v4 = velm[atom];
+            const mixed3 v = make_mixed3(v4.x, v4.y, v4.z);
+            const mixed3 vR = rigidVelocityAt(motion, loadPosition(posq, posqCorrection, atom));
+            const mixed3 next = factor*vR + drudeFactor*(v - vR);
+            velm[atom] = make_mixed4(next.x, next.y, next.z, v4.w);
+        }
+    }
+}
