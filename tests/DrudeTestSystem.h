@@ -12,8 +12,11 @@
 #include "openmm/DrudeForce.h"
 #include "openmm/NonbondedForce.h"
 #include "openmm/System.h"
+#include <algorithm>
 #include <cmath>
+#include <map>
 #include <memory>
+#include <string>
 #include <utility>
 #include <vector>
 
@@ -91,13 +94,30 @@ inline DrudeSystem drudeWaters(int numWaters, int numIons, double spacing) {
     return d;
 }
 
-/** A Reference Context of the system with its waters declared as bodies to the integrator. */
-inline std::unique_ptr<Context> referenceContext(const DrudeSystem& d, RigidBodyIntegrator& integrator) {
+/** A Context of the system on a platform with these properties, its waters declared as bodies to the integrator. */
+inline std::unique_ptr<Context> platformContext(const DrudeSystem& d, RigidBodyIntegrator& integrator,
+                                                const std::string& platformName,
+                                                const std::map<std::string, std::string>& properties = {}) {
     for (const vector<int>& body : d.bodies)
         integrator.addRigidBody(body);
-    std::unique_ptr<Context> context(new Context(d.system, integrator, platform("Reference")));
+    std::unique_ptr<Context> context(new Context(d.system, integrator, platform(platformName), properties));
     context->setPositions(d.positions);
     return context;
+}
+
+/** A Reference Context of the system with its waters declared as bodies to the integrator. */
+inline std::unique_ptr<Context> referenceContext(const DrudeSystem& d, RigidBodyIntegrator& integrator) {
+    return platformContext(d, integrator, "Reference");
+}
+
+/** The largest distance of a Drude particle from its core. */
+inline double farthestDrude(const DrudeSystem& d, const vector<Vec3>& positions) {
+    double farthest = 0;
+    for (const auto& pair : d.pairs) {
+        const Vec3 delta = positions[pair.first] - positions[pair.second];
+        farthest = std::max(farthest, std::sqrt(delta.dot(delta)));
+    }
+    return farthest;
 }
 
 inline double distance(const Vec3& a, const Vec3& b) {

@@ -1,10 +1,12 @@
 /*
  * MRattleDrudeLangevinIntegrator on Reference: bodies carrying Drude cores stay rigid and a
  * free Drude pair moves; the bodies' and the Drude particles' temperatures are their two
- * targets within their statistical errors; a Drude particle in a body, bad settings and the
- * device platforms are refused with a message; the hard wall holds Drude particles near their
- * cores and a step that crosses twice it is refused; checkpoints continue bit for bit; the
- * Drude noise alone keeps momentum; the settings round-trip through XML.
+ * targets within their statistical errors; a Drude particle in a body and bad settings are
+ * refused with a message; the hard wall holds Drude particles near their cores and a step that
+ * crosses twice it is refused; checkpoints continue bit for bit; the Drude noise alone keeps
+ * momentum; the settings round-trip through XML. On the device platforms (OpenCL, CUDA): the
+ * deterministic step (no friction, with the wall) follows Reference's, a failed step is undone,
+ * the temperatures reach their targets and checkpoints continue bit for bit.
  */
 #include "MRattleDrudeLangevinIntegrator.h"
 #include "MRattleLangevinIntegrator.h"
@@ -88,27 +90,34 @@ TEST(DrudeLangevin, DrudeNoiseAloneKeepsMomentumAndAngularMomentum) {
     // each augmented body's Drude particles with zero momentum and zero angular momentum,
     // and the forces (vacuum, no cutoff) and M-RATTLE keep both, so the totals stay as they
     // began. (A free pair's C is its relative motion, which turns the pair: no ions here.)
-    DrudeSystem d = drudeWaters(4, 0, 0.32);
-    MRattleDrudeLangevinIntegrator integrator(300, 0.0, 50, 20.0, 0.001);
-    integrator.setRandomNumberSeed(9);
-    std::unique_ptr<Context> context = referenceContext(d, integrator);
-    context->setVelocitiesToTemperature(300, 8);
-    const vector<double> m = masses(d.system);
-    const State start = context->getState(State::Positions | State::Velocities);
-    integrator.step(1000);
-    const State end = context->getState(State::Positions | State::Velocities);
-    const Vec3 p0 = totalMomentum(m, start.getVelocities()), p1 = totalMomentum(m, end.getVelocities());
-    // Leapfrog keeps sum m x_n x v_{n-1/2} (each drift moves x along v; the kicks are central,
-    // the noise has none about the positions it is drawn at, those the last half drift leaves
-    // it parallel to): the State's positions and velocities as they are.
-    const Vec3 l0 = angularMomentum(m, start.getPositions(), start.getVelocities());
-    const Vec3 l1 = angularMomentum(m, end.getPositions(), end.getVelocities());
-    for (int k = 0; k < 3; k++) {
-        EXPECT_NEAR(p0[k], p1[k], 1e-9) << "momentum, axis " << k;
-        EXPECT_NEAR(l0[k], l1[k], 1e-6) << "angular momentum, axis " << k;
+    // On Reference and, in double precision, on each device platform.
+    vector<string> platforms = {"Reference"};
+    for (const string& name : devicePlatforms())
+        if (unavailable(name).empty())
+            platforms.push_back(name);
+    for (const string& name : platforms) {
+        DrudeSystem d = drudeWaters(4, 0, 0.32);
+        MRattleDrudeLangevinIntegrator integrator(300, 0.0, 50, 20.0, 0.001);
+        integrator.setRandomNumberSeed(9);
+        std::unique_ptr<Context> context = platformContext(d, integrator, name, platformProperties(name));
+        context->setVelocitiesToTemperature(300, 8);
+        const vector<double> m = masses(d.system);
+        const State start = context->getState(State::Positions | State::Velocities);
+        integrator.step(1000);
+        const State end = context->getState(State::Positions | State::Velocities);
+        const Vec3 p0 = totalMomentum(m, start.getVelocities()), p1 = totalMomentum(m, end.getVelocities());
+        // Leapfrog keeps sum m x_n x v_{n-1/2} (each drift moves x along v; the kicks are central,
+        // the noise has none about the positions it is drawn at, those the last half drift leaves
+        // it parallel to): the State's positions and velocities as they are.
+        const Vec3 l0 = angularMomentum(m, start.getPositions(), start.getVelocities());
+        const Vec3 l1 = angularMomentum(m, end.getPositions(), end.getVelocities());
+        for (int k = 0; k < 3; k++) {
+            EXPECT_NEAR(p0[k], p1[k], 1e-9) << name << ", momentum, axis " << k;
+            EXPECT_NEAR(l0[k], l1[k], 1e-6) << name << ", angular momentum, axis " << k;
+        }
+        // The Drude particles did get the noise: they are near 50 K, not at the start's 300 K.
+        EXPECT_LT(integrator.computeDrudeTemperature(), 150) << name;
     }
-    // The Drude particles did get the noise: they are near 50 K, not at the start's 300 K.
-    EXPECT_LT(integrator.computeDrudeTemperature(), 150);
 }
 
 TEST(DrudeLangevin, WithoutFrictionItIsMRattleLangevin) {
@@ -230,6 +239,110 @@ TEST(DrudeLangevin, ADrudeParticleBeyondTwiceTheWallFailsTheStep) {
         EXPECT_EQ(before.getPositions()[i][0], after.getPositions()[i][0]) << "particle " << i;
 }
 
+TEST(DrudeLangevin, OnDevicesWithoutFrictionItFollowsReferenceAndAFailedStepIsUndone) {
+    // Double precision, both frictions 0 (deterministic) and a wall at 0.002 nm that the Drude
+    // particles (0.004 nm at 300 K) reach often: 200 steps of 0.25 fs from the same state
+    // follow Reference's bounces (without the wall Reference ends far from both). Then a Drude
+    // particle sent off at 20 nm/ps crosses twice the wall: the step is refused, and the
+    // Context holds the state from before it.
+    bool any = false;
+    for (const string& name : devicePlatforms()) {
+        if (!unavailable(name).empty())
+            continue;
+        any = true;
+        DrudeSystem d = drudeWaters(2, 1, 0.4);
+        const double wall = 0.002;
+        vector<vector<Vec3> > positions;
+        std::unique_ptr<Context> device;
+        MRattleDrudeLangevinIntegrator withoutWall(300, 0.0, 300, 0.0, 0.00025), onReference(300, 0.0, 300, 0.0, 0.00025),
+            onDevice(300, 0.0, 300, 0.0, 0.00025);
+        vector<Vec3> velocities;
+        for (MRattleDrudeLangevinIntegrator* integrator : {&withoutWall, &onReference, &onDevice}) {
+            integrator->setMaxDrudeDistance(integrator == &withoutWall ? 0.0 : wall);
+            std::unique_ptr<Context> context = (integrator != &onDevice ? referenceContext(d, *integrator)
+                                                : platformContext(d, *integrator, name, {{"Precision", "double"}}));
+            if (velocities.empty()) {
+                context->setVelocitiesToTemperature(300, 5);
+                velocities = context->getState(State::Velocities).getVelocities();
+            }
+            context->setVelocities(velocities);
+            integrator->step(200);
+            positions.push_back(context->getState(State::Positions).getPositions());
+            if (integrator == &onDevice)
+                device = std::move(context);
+        }
+        const double deviation = maxDeviation(positions[1], positions[2]);
+        std::cout << name << ": after 200 steps " << deviation << " nm from Reference; Reference without the wall "
+                  << maxDeviation(positions[0], positions[1]) << " nm away" << std::endl;
+        EXPECT_LT(deviation, 1e-7) << name;
+        EXPECT_GT(maxDeviation(positions[0], positions[2]), 1e-4) << name;   // the wall acted
+        EXPECT_LE(farthestDrude(d, positions[2]), wall * (1 + 1e-9)) << name;
+        vector<Vec3> v = device->getState(State::Velocities).getVelocities();
+        v[d.pairs[0].first] += Vec3(20.0, 0, 0);
+        device->setVelocities(v);
+        const State before = device->getState(State::Positions | State::Velocities);
+        const string message = messageOf([&] { onDevice.step(1); });
+        EXPECT_NE(string::npos, message.find("beyond twice the hard wall")) << message;
+        EXPECT_NE(string::npos, message.find("MRattleDrudeLangevinIntegrator")) << message;
+        const State after = device->getState(State::Positions | State::Velocities);
+        EXPECT_EQ(before.getStepCount(), after.getStepCount());
+        for (size_t i = 0; i < d.positions.size(); i++)
+            for (int k = 0; k < 3; k++) {
+                EXPECT_EQ(before.getPositions()[i][k], after.getPositions()[i][k]) << "particle " << i;
+                EXPECT_EQ(before.getVelocities()[i][k], after.getVelocities()[i][k]) << "particle " << i;
+            }
+    }
+    // A build or machine without OpenCL/CUDA (no pocl, no GPU): said, not passed.
+    if (!any)
+        GTEST_SKIP() << "no device platform here";
+}
+
+TEST(DrudeLangevin, OnDevicesTheTemperaturesReachTheirTargetsAndACheckpointContinuesBitForBit) {
+    // The device's default (single) precision on the Reference test's system and targets: the
+    // bodies at 300 K and the Drude particles at 50 K within their statistical errors; then 50
+    // steps after loading a checkpoint are the 50 steps run on (OpenMM's device random numbers
+    // are in it).
+    bool any = false;
+    for (const string& name : devicePlatforms()) {
+        if (!unavailable(name).empty())
+            continue;
+        any = true;
+        DrudeSystem d = drudeWaters(8, 2, 0.34);
+        const double temperature = 300, drudeTemperature = 50;
+        MRattleDrudeLangevinIntegrator integrator(temperature, 5.0, drudeTemperature, 20.0, 0.001);
+        integrator.setRandomNumberSeed(2024);
+        std::unique_ptr<Context> context = platformContext(d, integrator, name);
+        context->setVelocitiesToTemperature(temperature, 3);
+        integrator.step(2000);
+        vector<double> body, drude;
+        for (int sample = 0; sample < 4000; sample++) {
+            integrator.step(10);
+            body.push_back(integrator.computeBodyTemperature());
+            drude.push_back(integrator.computeDrudeTemperature());
+        }
+        const auto bodyMean = blockMean(body), drudeMean = blockMean(drude);
+        std::cout << name << ": body temperature " << bodyMean.first << " +- " << bodyMean.second << " K (target "
+                  << temperature << "), Drude temperature " << drudeMean.first << " +- " << drudeMean.second
+                  << " K (target " << drudeTemperature << ")" << std::endl;
+        EXPECT_NEAR(temperature, bodyMean.first, 3 * bodyMean.second) << name;
+        EXPECT_NEAR(drudeTemperature, drudeMean.first, 3 * drudeMean.second) << name;
+        EXPECT_LT(bodyMean.second, 0.03 * temperature) << name;
+        EXPECT_LT(drudeMean.second, 0.03 * drudeTemperature) << name;
+        std::stringstream checkpoint;
+        context->createCheckpoint(checkpoint);
+        integrator.step(50);
+        const vector<Vec3> straight = context->getState(State::Positions).getPositions();
+        context->loadCheckpoint(checkpoint);
+        integrator.step(50);
+        const vector<Vec3> again = context->getState(State::Positions).getPositions();
+        for (size_t i = 0; i < straight.size(); i++)
+            for (int k = 0; k < 3; k++)
+                EXPECT_EQ(straight[i][k], again[i][k]) << name << ", particle " << i;
+    }
+    if (!any)
+        GTEST_SKIP() << "no device platform here";
+}
+
 #endif // MRATTLE_HAVE_DRUDE
 
 TEST(DrudeLangevin, BadSettingsAreRefused) {
@@ -263,21 +376,4 @@ TEST(DrudeLangevin, SettingsRoundTripThroughXml) {
     EXPECT_EQ(0.02, read.getMaxDrudeDistance());
     EXPECT_EQ(17, read.getRandomNumberSeed());
     EXPECT_EQ(0.0015, read.getStepSize());
-}
-
-TEST(DrudeLangevin, DevicePlatformsRefuseItNamingIt) {
-    bool any = false;
-    for (const string& name : devicePlatforms()) {
-        if (!unavailable(name).empty())
-            continue;
-        any = true;
-        Cluster c = buildCluster(water(), 1, 0.5, 1);
-        MRattleDrudeLangevinIntegrator integrator(300, 1.0, 1.0, 20.0, 0.001);
-        const string message = messageOf([&] { Context context(*c.system, integrator, platform(name)); });
-        EXPECT_NE(string::npos, message.find("MRattleDrudeLangevinIntegrator")) << message;
-        EXPECT_NE(string::npos, message.find("not on " + name)) << message;
-    }
-    // A build or machine without OpenCL/CUDA (no pocl, no GPU) has nothing to refuse it: said, not passed.
-    if (!any)
-        GTEST_SKIP() << "no device platform here";
 }

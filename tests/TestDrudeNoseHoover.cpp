@@ -3,8 +3,10 @@
  * kinetic + potential + both chains' energy is conserved up to the step's error; the bodies'
  * and the Drude particles' temperatures are their two targets within their statistical
  * errors; a checkpoint continues bit for bit; a failed step (a Drude particle beyond twice the
- * wall) leaves both chains as they were; bad settings and the device platforms are refused
- * with a message; the settings round-trip through XML.
+ * wall) leaves both chains as they were; bad settings are refused with a message; the settings
+ * round-trip through XML. On the device platforms (OpenCL, CUDA): the step follows Reference's
+ * (double precision), a failed step leaves both chains, the temperatures reach their targets
+ * and checkpoints continue bit for bit.
  */
 #include "DrudeTestSystem.h"
 #include "MRattleDrudeLangevinIntegrator.h"
@@ -41,21 +43,22 @@ string stateXml(Context& context) {
 }
 
 /**
- * A Reference Context of the waters (no ions) for the integrator, at positions and velocities
+ * A Context of the waters (no ions) for the integrator (on Reference unless named), at positions and velocities
  * from 3 ps of MRattleDrudeLangevinIntegrator at 300 K and Drude 50 K from the lattice: the
  * cluster's collapse heats it to about 1000 K, which Langevin takes out fast and a chain
  * slowly. (The free ions of drudeWaters() are no part of these runs: their Drude particles
  * have no repulsion from the waters' hydrogens, and a hot cluster brings on the polarization
  * catastrophe, which only the hard wall stops.)
  */
-std::unique_ptr<Context> equilibratedWaters(const DrudeSystem& d, RigidBodyIntegrator& integrator) {
+std::unique_ptr<Context> equilibratedWaters(const DrudeSystem& d, RigidBodyIntegrator& integrator,
+                                            const string& platformName = "Reference") {
     MRattleDrudeLangevinIntegrator langevin(300, 5.0, 50, 20.0, 0.001);
     langevin.setRandomNumberSeed(3);
     std::unique_ptr<Context> warm = referenceContext(d, langevin);
     warm->setVelocitiesToTemperature(300, 3);
     langevin.step(3000);
     const State state = warm->getState(State::Positions | State::Velocities);
-    std::unique_ptr<Context> context = referenceContext(d, integrator);
+    std::unique_ptr<Context> context = platformContext(d, integrator, platformName);
     context->setPositions(state.getPositions());
     context->setVelocities(state.getVelocities());
     return context;
@@ -230,6 +233,108 @@ TEST(DrudeNoseHoover, ADrudeParticleInABodyIsRefusedNamingIt) {
     EXPECT_NE(string::npos, message.find("Drude particle 7")) << message;
 }
 
+TEST(DrudeNoseHoover, OnDevicesItFollowsReferenceAndAFailedStepLeavesBothChains) {
+    // Double precision, both chains coupled and a wall at 0.002 nm that the Drude particles
+    // reach often: 200 steps of 0.25 fs from the same state follow Reference's, chains and
+    // bounces (without the wall Reference ends far from both). Then a Drude particle sent off
+    // at 20 nm/ps crosses twice the wall: the step is refused, and positions, velocities and
+    // both chains are as before it.
+    bool any = false;
+    for (const string& name : devicePlatforms()) {
+        if (!unavailable(name).empty())
+            continue;
+        any = true;
+        DrudeSystem d = drudeWaters(2, 1, 0.4);
+        const double wall = 0.002;
+        vector<vector<Vec3> > positions;
+        vector<double> baths;
+        std::unique_ptr<Context> device;
+        MRattleDrudeNoseHooverIntegrator withoutWall(300, 10.0, 50, 20.0, 0.00025), onReference(300, 10.0, 50, 20.0, 0.00025),
+            onDevice(300, 10.0, 50, 20.0, 0.00025);
+        vector<Vec3> velocities;
+        for (MRattleDrudeNoseHooverIntegrator* integrator : {&withoutWall, &onReference, &onDevice}) {
+            integrator->setMaxDrudeDistance(integrator == &withoutWall ? 0.0 : wall);
+            std::unique_ptr<Context> context = (integrator != &onDevice ? referenceContext(d, *integrator)
+                                                : platformContext(d, *integrator, name, {{"Precision", "double"}}));
+            if (velocities.empty()) {
+                context->setVelocitiesToTemperature(300, 5);
+                velocities = context->getState(State::Velocities).getVelocities();
+            }
+            context->setVelocities(velocities);
+            integrator->step(200);
+            positions.push_back(context->getState(State::Positions).getPositions());
+            baths.push_back(integrator->computeHeatBathEnergy());
+            if (integrator == &onDevice)
+                device = std::move(context);
+        }
+        const double deviation = maxDeviation(positions[1], positions[2]);
+        std::cout << name << ": after 200 steps " << deviation << " nm from Reference, heat bath " << baths[2]
+                  << " kJ/mol (Reference's " << baths[1] << ", relative difference "
+                  << std::fabs(baths[2] - baths[1]) / std::fabs(baths[1]) << "); Reference without the wall "
+                  << maxDeviation(positions[0], positions[1]) << " nm away" << std::endl;
+        EXPECT_LT(deviation, 1e-7) << name;
+        EXPECT_NEAR(baths[1], baths[2], 1e-6 * std::fabs(baths[1])) << name;
+        EXPECT_GT(std::fabs(baths[1]), 0.1) << name;   // the chains moved
+        EXPECT_GT(maxDeviation(positions[0], positions[2]), 1e-4) << name;   // the wall acted
+        vector<Vec3> v = device->getState(State::Velocities).getVelocities();
+        const int drude = d.pairs[0].first;
+        v[drude] += Vec3(20.0, 0, 0);
+        device->setVelocities(v);
+        const string before = stateXml(*device);
+        const double bath = onDevice.computeHeatBathEnergy();
+        const int steps = device->getState(0).getStepCount();
+        const string message = messageOf([&] { onDevice.step(1); });
+        EXPECT_NE(string::npos, message.find("beyond twice the hard wall")) << message;
+        EXPECT_NE(string::npos, message.find("MRattleDrudeNoseHooverIntegrator")) << message;
+        EXPECT_EQ(before, stateXml(*device)) << name;
+        EXPECT_EQ(bath, onDevice.computeHeatBathEnergy()) << name;
+        EXPECT_EQ(steps, device->getState(0).getStepCount()) << name;
+    }
+    // A build or machine without OpenCL/CUDA (no pocl, no GPU): said, not passed.
+    if (!any)
+        GTEST_SKIP() << "no device platform here";
+}
+
+TEST(DrudeNoseHoover, OnDevicesTheTemperaturesReachTheirTargetsAndACheckpointContinuesBitForBit) {
+    // The device's default (single) precision on the Reference test's system and targets:
+    // 48 body degrees of freedom at 300 K, 24 Drude ones at 50 K, with the wall (0.02 nm);
+    // then 50 steps after loading a checkpoint are the 50 steps run on, both chains included.
+    bool any = false;
+    for (const string& name : devicePlatforms()) {
+        if (!unavailable(name).empty())
+            continue;
+        any = true;
+        DrudeSystem d = drudeWaters(8, 0, 0.34);
+        const double temperature = 300, drudeTemperature = 50;
+        MRattleDrudeNoseHooverIntegrator integrator(temperature, 10.0, drudeTemperature, 20.0, 0.001);
+        std::unique_ptr<Context> context = equilibratedWaters(d, integrator, name);
+        integrator.step(2000);
+        vector<double> body, drude;
+        for (int sample = 0; sample < 4000; sample++) {
+            integrator.step(10);
+            body.push_back(integrator.computeBodyTemperature());
+            drude.push_back(integrator.computeDrudeTemperature());
+        }
+        const auto bodyMean = blockMean(body), drudeMean = blockMean(drude);
+        std::cout << name << ": body temperature " << bodyMean.first << " +- " << bodyMean.second << " K (target "
+                  << temperature << "), Drude temperature " << drudeMean.first << " +- " << drudeMean.second
+                  << " K (target " << drudeTemperature << ")" << std::endl;
+        EXPECT_NEAR(temperature, bodyMean.first, 3 * bodyMean.second) << name;
+        EXPECT_NEAR(drudeTemperature, drudeMean.first, 3 * drudeMean.second) << name;
+        EXPECT_LT(bodyMean.second, 0.03 * temperature) << name;
+        EXPECT_LT(drudeMean.second, 0.03 * drudeTemperature) << name;
+        std::stringstream checkpoint;
+        context->createCheckpoint(checkpoint);
+        integrator.step(50);
+        const string straight = stateXml(*context);
+        context->loadCheckpoint(checkpoint);
+        integrator.step(50);
+        EXPECT_EQ(straight, stateXml(*context)) << name;
+    }
+    if (!any)
+        GTEST_SKIP() << "no device platform here";
+}
+
 #endif // MRATTLE_HAVE_DRUDE
 
 TEST(DrudeNoseHoover, BadSettingsAreRefused) {
@@ -276,20 +381,4 @@ TEST(DrudeNoseHoover, SettingsRoundTripThroughXml) {
     EXPECT_EQ(2, read.getNumMultiTimeSteps());
     EXPECT_EQ(5, read.getNumYoshidaSuzukiTimeSteps());
     EXPECT_EQ(0.0015, read.getStepSize());
-}
-
-TEST(DrudeNoseHoover, DevicePlatformsRefuseItNamingIt) {
-    bool any = false;
-    for (const string& name : devicePlatforms()) {
-        if (!unavailable(name).empty())
-            continue;
-        any = true;
-        Cluster c = buildCluster(water(), 1, 0.5, 1);
-        MRattleDrudeNoseHooverIntegrator integrator(300, 10.0, 1.0, 20.0, 0.001);
-        const string message = messageOf([&] { Context context(*c.system, integrator, platform(name)); });
-        EXPECT_NE(string::npos, message.find("MRattleDrudeNoseHooverIntegrator")) << message;
-        EXPECT_NE(string::npos, message.find("not on " + name)) << message;
-    }
-    if (!any)
-        GTEST_SKIP() << "no device platform here";
 }

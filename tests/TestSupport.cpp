@@ -180,9 +180,8 @@ const std::vector<IntegratorTraits>& integrators() {
          [](RigidBodyIntegrator& integrator) {
              return dynamic_cast<MRattleBussiIntegrator&>(integrator).computeHeatBathEnergy();
          }},
-        // Reference and CPU only (the device platforms refuse it); the generic suites' Systems
-        // have no DrudeForce, where it is MRattleLangevin with its own draws.
-        {"MRattleDrudeLangevin", false, true, false, true, false,
+        // The generic suites' Systems have no DrudeForce, where it is MRattleLangevin with its own draws.
+        {"MRattleDrudeLangevin", false, true, true, true, false,
          maker<MRattleDrudeLangevinIntegrator>([](auto make, double h) {
              auto* drude = make(300.0, 1.0, 1.0, 20.0, h);
              drude->setRandomNumberSeed(2024);
@@ -194,9 +193,9 @@ const std::vector<IntegratorTraits>& integrators() {
              drude.setDrudeFriction(0);
          },
          nullptr, true},
-        // Reference and CPU only; without a DrudeForce its Drude chain rests and it is
-        // MRattleNoseHoover with the body chain on all degrees of freedom.
-        {"MRattleDrudeNoseHoover", false, false, false, true, true,   // 300 K, 10/ps; Drude 1 K, 20/ps
+        // Without a DrudeForce its Drude chain rests and it is MRattleNoseHoover with the body
+        // chain on all degrees of freedom.
+        {"MRattleDrudeNoseHoover", false, false, true, true, true,   // 300 K, 10/ps; Drude 1 K, 20/ps
          maker<MRattleDrudeNoseHooverIntegrator>([](auto make, double h) { return make(300.0, 10.0, 1.0, 20.0, h); }),
          nullptr,
          [](RigidBodyIntegrator& integrator) {

@@ -21,7 +21,8 @@ namespace MRattlePlugin {
  * naming it; declare the bodies with addRigidBody()); their cores may be. With a
  * maxDrudeDistance > 0, a Drude particle found farther than it from its core after the drift
  * bounces off the wall as in OpenMM's (a core in a body: the Drude particle alone moves); one
- * beyond twice the distance fails the step. Runs on the Reference and CPU platforms only.
+ * beyond twice the distance fails the step. Runs on every platform (OpenCL and CUDA through
+ * the plugin's common device kernels).
  */
 class OPENMM_EXPORT_MRATTLE MRattleDrudeLangevinIntegrator : public RigidBodyIntegrator {
 public:

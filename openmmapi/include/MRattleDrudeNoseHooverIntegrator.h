@@ -24,7 +24,8 @@ namespace MRattlePlugin {
  * (chainPositions, chainVelocities, drudeChainPositions, drudeChainVelocities). Drude
  * particles are never members of a body, and the hard wall (maxDrudeDistance, 0.02 nm by
  * default as OpenMM's) acts after the drift, as for MRattleDrudeLangevinIntegrator. Runs on
- * the Reference and CPU platforms only.
+ * every platform (OpenCL and CUDA through the plugin's common device kernels, both chains on
+ * the device).
  */
 class OPENMM_EXPORT_MRATTLE MRattleDrudeNoseHooverIntegrator : public RigidBodyIntegrator {
 public:

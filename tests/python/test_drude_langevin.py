@@ -70,3 +70,32 @@ def test_drude_particles_in_default_bodies_are_refused():
     integrator = mrattle.MRattleDrudeLangevinIntegrator(300, 5, 1, 20, 0.001)
     with pytest.raises(openmm.OpenMMException, match='Drude particle 4'):
         openmm.Context(system, integrator, openmm.Platform.getPlatformByName('Reference'))
+
+
+def test_swm4ndp_on_the_device_in_single_precision(devicePlatform):
+    """OpenMM's SWM4-NDP water (its M sites virtual) in the device's default precision: the
+    bodies stay rigid to float's round-off, the hard wall holds the Drude particles, and the
+    two temperatures are finite and of the right size."""
+    system, positions, bodies = swm4ndp(8)
+    integrator = mrattle.MRattleDrudeLangevinIntegrator(300*unit.kelvin, 5/unit.picosecond, 1*unit.kelvin,
+                                                        20/unit.picosecond, 1*unit.femtoseconds)
+    integrator.setMaxDrudeDistance(0.02*unit.nanometer)
+    integrator.setRandomNumberSeed(4)
+    for body in bodies:
+        integrator.addRigidBody(body)
+    context = openmm.Context(system, integrator, devicePlatform, {'Precision': 'single'})
+    context.setPositions(positions)
+    context.setVelocitiesToTemperature(300*unit.kelvin, 2)
+    start = context.getState(getPositions=True).getPositions(asNumpy=True).value_in_unit(unit.nanometer)
+    integrator.step(300)
+    end = context.getState(getPositions=True).getPositions(asNumpy=True).value_in_unit(unit.nanometer)
+    for body in bodies:
+        for i in body:
+            for j in body:
+                assert abs(np.linalg.norm(end[i] - end[j]) - np.linalg.norm(start[i] - start[j])) < 1e-5
+    drude = [f for f in system.getForces() if isinstance(f, openmm.DrudeForce)][0]
+    for k in range(drude.getNumParticles()):
+        particle, core = drude.getParticleParameters(k)[:2]
+        assert np.linalg.norm(end[particle] - end[core]) <= 0.02*(1 + 1e-5)
+    assert 100 < integrator.computeBodyTemperature().value_in_unit(unit.kelvin) < 600
+    assert 0 <= integrator.computeDrudeTemperature().value_in_unit(unit.kelvin) < 100

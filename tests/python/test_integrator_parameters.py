@@ -23,7 +23,7 @@ import mrattle
 from mrattle.reporters import DRUDE_INTEGRATORS, HEAT_BATH_INTEGRATORS
 
 # The thermostats constructed as (temperature, collisionFrequency, stepSize): the Drude ones
-# (OpenMM's Drude integrators' constructors, Reference and CPU only) have tests of their own.
+# (OpenMM's Drude integrators' constructors) have tests of their own.
 HEAT_BATH_INTEGRATORS = [cls for cls in HEAT_BATH_INTEGRATORS if cls not in DRUDE_INTEGRATORS]
 
 THERMOSTATS = [mrattle.MRattleLangevinIntegrator] + list(HEAT_BATH_INTEGRATORS)

@@ -3,6 +3,7 @@
 
 #include "RigidBodyTopology.h"
 #include "internal/BodyShapeConstraints.h"
+#include "internal/DrudeGroups.h"
 #include "internal/RigidBodyState.h"
 #include "mrattle/RigidBodyMath.h"
 #include "openmm/System.h"
@@ -77,6 +78,21 @@ public:
     void addNoise(double friction, double temperature, double h);
     /** RATTLE's velocity step: bodies onto rigid-body motion, free constraints to the tolerance. */
     void project(double tolerance);
+    /**
+     * The Drude integrators' noise (drudeFriction 0 for the plain split): each Drude group's
+     * rigid motion R at the temperature, the rest C at the Drude temperature, every other atom
+     * as addNoise (kernels/drude.cc); a project() must follow. Needs setDrudeGroups().
+     */
+    void addDrudeNoise(double friction, double temperature, double drudeFriction, double drudeTemperature, double h);
+    /** The hard wall after the drift (nothing if maxDistance <= 0); beyond twice it the step fails. */
+    void bounceDrudes(double maxDistance, double drudeTemperature, double h);
+    /**
+     * sumKineticEnergy(), and twice each Drude group's KE_C into drudeRelativeEnergies(), for a
+     * two-chain thermostat's kernel (which puts its factors for R and C into velocityScale[0], [1]).
+     */
+    void sumDrudeKineticEnergies();
+    /** Every Drude group's R scaled by velocityScale[0], its C by velocityScale[1]; every other atom by [0]. */
+    void scaleDrudeVelocities();
     /** Virtual sites at the new positions, then the forces there. */
     void computeForces(OpenMM::ContextImpl& context, const RigidBodyIntegrator& integrator, bool& forcesAreValid);
     /** The clock, OpenMM's reordering, and the lazy failure check (a failure found is undone and thrown). */
@@ -108,6 +124,18 @@ public:
      * those numbers, for the kernel that adds the sums up (addPartialSums in the device code).
      */
     unsigned int sumKineticEnergy(int numGaussians = 0);
+    /**
+     * The System's Drude groups (DrudeGroups), on the device for the Drude phases above; after
+     * initialize() with CommonMRattleKernelSources::drude among its sources.
+     */
+    void setDrudeGroups(const DrudeGroups& groups);
+    /** Twice each Drude group's KE_C, as sumDrudeKineticEnergies() leaves it (one per group). */
+    OpenMM::ComputeArray& drudeRelativeEnergies() {
+        return drudeRelative;
+    }
+    int numDrudeGroups() const {
+        return numDrudeGroupsOnDevice;
+    }
     /** Launch an integrator kernel (made with integratorArguments) in the step's order. */
     void launch(OpenMM::ComputeKernel& kernel, int workItems, int groupSize = -1);
     /** The work-group size of sumKineticEnergy and of an integrator's one-group kernels (REDUCTION_THREADS). */
@@ -179,6 +207,10 @@ private:
     /** Device atom indices of the bodies' atoms and the constraints' ends, after a reorder. */
     void mapAtoms();
     void setKernelArguments();
+    /** The Drude kernels' arguments (CommonRigidBodyDrude.cpp). */
+    void setDrudeKernelArguments();
+    /** DRUDE_GROUP_ARGUMENTS of the device code. */
+    void addDrudeGroupArguments(Arguments& arguments);
     /** BODY_ARGUMENTS of the device code. */
     void addBodyArguments(Arguments& arguments);
     /** BACKUP_ARGUMENTS of the device code; returns the index of backupStepIndex. */
@@ -263,6 +295,15 @@ private:
     OpenMM::ComputeArray bodyEnergies;
     OpenMM::ComputeKernel advanceGroups, projectBodies, constrainFreeVelocities, collideBodies, partialSums,
         bodyKineticEnergy;
+    // The Drude groups (setDrudeGroups, CommonRigidBodyDrude.cpp): System indices, group-major
+    // (a group's atoms, then its Drude particles), the atoms in no group, (Drude, core) pairs group-major.
+    std::vector<int> systemDrudeGroupAtoms, systemUngroupedAtoms, systemDrudePairAtoms;
+    int numDrudeGroupsOnDevice = 0, numUngrouped = 0;
+    bool hasDrudeGroups = false;
+    OpenMM::ComputeArray drudeGroupStart, drudeGroupAtoms, drudeGroupRotates, ungroupedAtoms, drudePairStart,
+        drudePairAtoms, drudeNoiseField, drudeRelative;
+    OpenMM::ComputeKernel drudeNoise, drudeHardWall, drudeRelativeEnergy, drudeScale;
+    int drudeNoiseArguments, drudeNoiseRandomIndex, drudeWallArguments;
     int advanceBackupIndex, advanceKickTime, advanceProjectAfterKick, advanceDriftTime, advanceTolerance,
         advanceNoiseDecay, advanceNoiseScale, advanceRandomIndex, advanceProjectAtEnd, advanceResetFollows,
         advanceStepIndex, advanceScaleVelocities, projectOnlyIfNotRigid, freeVelocitiesTolerance,

@@ -99,6 +99,43 @@ private:
     int argumentRandomIndex, argumentDof, argumentKT, argumentC;
 };
 
+/**
+ * MRattleDrudeLangevinIntegrator: MRattleLangevinIntegrator's step with the noise split between
+ * the Drude groups' rigid motion and their Drude particles' relative motion (the state's
+ * Drude phases), and the hard wall after the drift.
+ */
+class CommonIntegrateMRattleDrudeLangevinStepKernel : public CommonStepKernel {
+public:
+    using CommonStepKernel::CommonStepKernel;
+    /** The Drude groups (a Drude particle in a body is refused here) and OpenMM's device random numbers. */
+    void initialize(const OpenMM::System& system, const RigidBodyTopology& topology,
+                    const RigidBodyIntegrator& integrator) override;
+    void execute(OpenMM::ContextImpl& context, const RigidBodyIntegrator& integrator, bool& forcesAreValid) override;
+};
+
+/**
+ * MRattleDrudeNoseHooverIntegrator: two Nose-Hoover chains on the device, one on the Drude
+ * groups' rigid motion and the other atoms, one on the Drude particles' relative motion
+ * (kernels/thermostats.cc), declared to the state; velocity Verlet with M-RATTLE and the hard
+ * wall between their half steps.
+ */
+class CommonIntegrateMRattleDrudeNoseHooverStepKernel : public CommonStepKernel {
+public:
+    using CommonStepKernel::CommonStepKernel;
+    void initialize(const OpenMM::System& system, const RigidBodyTopology& topology,
+                    const RigidBodyIntegrator& integrator) override;
+    void execute(OpenMM::ContextImpl& context, const RigidBodyIntegrator& integrator, bool& forcesAreValid) override;
+    double computeHeatBathEnergy(OpenMM::ContextImpl& context, const RigidBodyIntegrator& integrator) override;
+
+private:
+    /** Both chains over half a step from KE_R and KE_C, then the velocities scaled by their factors. */
+    void chainsHalfStep(const RigidBodyIntegrator& integrator);
+    OpenMM::ComputeKernel kernel;
+    OpenMM::ComputeArray weights;
+    int numDrudes = 0;
+    int argumentDof;
+};
+
 } // namespace MRattlePlugin
 
 #endif

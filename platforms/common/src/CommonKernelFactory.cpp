@@ -33,6 +33,10 @@ public:
             return new CommonIntegrateMRattleNoseHooverStepKernel(name, platform, cc);
         if (name == IntegratorNames::MRattleBussi.stepKernel)
             return new CommonIntegrateMRattleBussiStepKernel(name, platform, cc);
+        if (name == IntegratorNames::MRattleDrudeLangevin.stepKernel)
+            return new CommonIntegrateMRattleDrudeLangevinStepKernel(name, platform, cc);
+        if (name == IntegratorNames::MRattleDrudeNoseHoover.stepKernel)
+            return new CommonIntegrateMRattleDrudeNoseHooverStepKernel(name, platform, cc);
         // An integrator without a device kernel (the splitting baseline) names where it runs.
         const std::string baseline = name == IntegratorNames::RigidSplitting.stepKernel ? " (the paper's baseline)" : "";
         throw OpenMMException(IntegratorNames::ofStepKernel(name).integrator + baseline + " runs on the " +

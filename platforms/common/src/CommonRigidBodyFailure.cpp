@@ -237,8 +237,9 @@ void CommonRigidBodyState::restoreAcrossReorder() {
 
 std::string CommonRigidBodyState::failureMessage(long long failedStepCount) const {
     return integratorName + ": at step " + std::to_string(failedStepCount) +
-           " the position reset of a rigid body found no rotation, the free-particle constraints did not converge, or "
-           "a velocity was not finite (or beyond " + std::to_string((int) LargestSpeed) + " nm/ps, what a force that is "
+           " the position reset of a rigid body found no rotation, the free-particle constraints did not converge, " +
+           (hasDrudeGroups ? "a Drude particle went beyond twice the hard wall's maxDrudeDistance from its core, " : "") +
+           "or a velocity was not finite (or beyond " + std::to_string((int) LargestSpeed) + " nm/ps, what a force that is "
            "not finite gives on the device): the step size is too large for the forces, or they are not finite. The "
            "Context holds the state from before that step.";
 }

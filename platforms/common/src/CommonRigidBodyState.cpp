@@ -161,7 +161,8 @@ void CommonRigidBodyState::initialize(const System& system, const RigidBodyTopol
                              doubleMixed() ? sizeof(mm_double4) : sizeof(mm_float4), "mrattleBodyReference");
     bodyReference.upload(vector<mm_double4>(bodyReference.getSize(), mm_double4(0, 0, 0, 0)), true);
     initializeMixedArray(bodyOrientation, identityOrientations(), "mrattleBodyOrientation");
-    initializeMixedArray(velocityScale, {1.0}, "mrattleVelocityScale");
+    // The factors of the next scaling: every velocity's (and the Drude groups' R), and the Drude groups' C.
+    initializeMixedArray(velocityScale, {1.0, 1.0}, "mrattleVelocityScale");
     // A launch has at most getNumThreadBlocks() work groups (OpenMM's rule, both platforms).
     initializeMixedArray(partials, vector<double>(2 * cc.getNumThreadBlocks(), 0.0), "mrattlePartialSums");
     partialCount.initialize<int>(cc, 1, "mrattlePartialCount");
@@ -218,6 +219,9 @@ void CommonRigidBodyState::mapAtoms() {
     upload(systemBodyAtoms, bodyAtoms);
     upload(systemClusterAtoms, clusterAtoms);
     upload(systemFreeAtoms, freeAtoms);
+    upload(systemDrudeGroupAtoms, drudeGroupAtoms);
+    upload(systemUngroupedAtoms, ungroupedAtoms);
+    upload(systemDrudePairAtoms, drudePairAtoms);
     if (!systemConstraintAtoms.empty()) {
         vector<mm_int2> atoms(systemConstraintAtoms.size() / 2);
         for (size_t k = 0; k < atoms.size(); k++)

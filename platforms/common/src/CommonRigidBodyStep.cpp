@@ -190,6 +190,8 @@ void CommonRigidBodyState::setKernelArguments() {
         collideRandomIndex = collide.add(0u);
         collide.add(failure);
     }
+    if (hasDrudeGroups)
+        setDrudeKernelArguments();
     argumentsSet = true;
 }
 
@@ -251,7 +253,8 @@ void CommonRigidBodyState::addNoise(double friction, double temperature, double 
 
 void CommonRigidBodyState::project(double tolerance) {
     this->tolerance = tolerance;
-    if (pending.last == Slot::Kick)
+    // After a kick, or first in a pass (after a kernel of the whole device): the pass's first projection.
+    if (pending.last == Slot::Kick || pending.last == Slot::None)
         pending.last = Slot::ProjectAfterKick, pending.projectAfterKick = true;
     else if (pending.last == Slot::Noise)
         pending.last = Slot::NoiseProjected;  // the noise's own projection

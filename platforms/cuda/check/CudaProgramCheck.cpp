@@ -195,11 +195,15 @@ int main(int argc, char** argv) {
     std::cout << "NVRTC " << major << "." << minor << ", compute_" << arch << "\n";
     // The programs the plugin compiles (CommonRigidBodyState::initialize): the step's, with
     // collisions.cc when the System has an AndersenThermostat, with thermostats.cc for the
-    // thermostats; and the body kinetic energy (computeKineticEnergies, no defines).
+    // thermostats, with drude.cc for the Drude integrators (and thermostats.cc for the
+    // Nose-Hoover one); and the body kinetic energy (computeKineticEnergies, no defines).
     const std::vector<std::pair<std::string, std::string>> stepPrograms = {
         {"step", CommonRigidBodyState::programSource("")},
         {"step+collisions", CommonRigidBodyState::programSource(CommonMRattleKernelSources::collisions)},
-        {"step+thermostats", CommonRigidBodyState::programSource(CommonMRattleKernelSources::thermostats)}};
+        {"step+thermostats", CommonRigidBodyState::programSource(CommonMRattleKernelSources::thermostats)},
+        {"step+drude", CommonRigidBodyState::programSource(CommonMRattleKernelSources::drude)},
+        {"step+thermostats+drude", CommonRigidBodyState::programSource(CommonMRattleKernelSources::thermostats +
+                                                                       CommonMRattleKernelSources::drude)}};
     const Precision precisions[] = {{"single", false, false}, {"mixed", false, true}, {"double", true, false}};
     int failed = 0;
     for (const Precision& p : precisions) {

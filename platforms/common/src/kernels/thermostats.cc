@@ -4,17 +4,19 @@
  * sumKineticEnergy (reduction.cc), then one of these kernels, one work group that adds the
  * partial sums and turns them into the factor (velocityScale[0]), then the state's
  * scaleVelocities phase. The maths is RigidBodyThermostats' (openmmapi), which the tests
- * hold it to. The chain and the work are declared arrays: the state backs them up.
+ * hold it to. The chain and the work are declared arrays: the state backs them up. The Drude
+ * integrator's two chains (MRattleDrudeNoseHooverIntegrator) scale two parts of the velocities
+ * by two factors (the state's scaleDrudeVelocities, kernels/drude.cc).
  */
 
 /**
- * The factor for every velocity; one that is not finite (from a kinetic energy that is not)
- * is a failure of the step, which the host then undoes.
+ * A factor of the next scaling (velocityScale[index]); one that is not finite (from a kinetic
+ * energy that is not) is a failure of the step, which the host then undoes.
  */
-DEVICE void setVelocityScale(mixed factor, GLOBAL mixed* RESTRICT velocityScale, GLOBAL int* RESTRICT failure,
-        int stepIndex) {
+DEVICE void setVelocityScale(mixed factor, int index, GLOBAL mixed* RESTRICT velocityScale,
+        GLOBAL int* RESTRICT failure, int stepIndex) {
     if (factor*factor <= 1e30f)
-        velocityScale[0] = factor;
+        velocityScale[index] = factor;
     else
         recordFailure(failure, stepIndex);
 }
@@ -40,22 +42,15 @@ DEVICE void chainHalfUpdate(int j, mixed s, int chainLength, mixed twiceKinetic,
 }
 
 /**
- * Half a step of the Nose-Hoover chain (numMTS sub-steps, each a Yoshida-Suzuki composition
- * with the given weights) from the kinetic energy's partial sums: the factor of every
- * velocity into velocityScale[0]. One work group.
+ * Half a step of a Nose-Hoover chain (numMTS sub-steps, each a Yoshida-Suzuki composition with
+ * the given weights) on twice the kinetic energy of dof degrees of freedom: returns the factor
+ * of their velocities.
  */
-KERNEL void noseHooverChainHalfStep(STATE_ARGUMENTS, int chainLength, int positionOffset, int velocityOffset,
-        GLOBAL const mixed* RESTRICT weights, int numWeights, int numMTS, mixed dof, mixed kT, mixed frequency,
-        mixed halfStep) {
-    LOCAL mixed sums[REDUCTION_THREADS];
-    LOCAL mixed unused[REDUCTION_THREADS];
-    addPartialSums(partials, partialCount, sums, unused);
-    if (LOCAL_ID != 0 || failure[0] != 0)
-        return;
-    GLOBAL mixed* chainPosition = integratorArrays + positionOffset;
-    GLOBAL mixed* chainVelocity = integratorArrays + velocityOffset;
+DEVICE mixed propagateChain(GLOBAL mixed* RESTRICT chainPosition, GLOBAL mixed* RESTRICT chainVelocity, int chainLength,
+        mixed twiceKinetic, GLOBAL const mixed* RESTRICT weights, int numWeights, int numMTS, mixed dof, mixed kT,
+        mixed frequency, mixed halfStep) {
     const mixed w2 = frequency*frequency;
-    mixed twiceKinetic = sums[0], scale = 1;
+    mixed scale = 1;
     for (int mts = 0; mts < numMTS; mts++)
         for (int k = 0; k < numWeights; k++) {
             const mixed s = weights[k]*halfStep/numMTS;
@@ -69,7 +64,60 @@ KERNEL void noseHooverChainHalfStep(STATE_ARGUMENTS, int chainLength, int positi
             for (int j = 0; j < chainLength; j++)
                 chainHalfUpdate(j, s, chainLength, twiceKinetic, chainVelocity, dof, kT, w2);
         }
-    setVelocityScale(scale, velocityScale, failure, stepIndex);
+    return scale;
+}
+
+/**
+ * Half a step of the Nose-Hoover chain from the kinetic energy's partial sums: the factor of
+ * every velocity into velocityScale[0]. One work group.
+ */
+KERNEL void noseHooverChainHalfStep(STATE_ARGUMENTS, int chainLength, int positionOffset, int velocityOffset,
+        GLOBAL const mixed* RESTRICT weights, int numWeights, int numMTS, mixed dof, mixed kT, mixed frequency,
+        mixed halfStep) {
+    LOCAL mixed sums[REDUCTION_THREADS];
+    LOCAL mixed unused[REDUCTION_THREADS];
+    addPartialSums(partials, partialCount, sums, unused);
+    if (LOCAL_ID != 0 || failure[0] != 0)
+        return;
+    const mixed scale = propagateChain(integratorArrays + positionOffset, integratorArrays + velocityOffset, chainLength,
+                                       sums[0], weights, numWeights, numMTS, dof, kT, frequency, halfStep);
+    setVelocityScale(scale, 0, velocityScale, failure, stepIndex);
+}
+
+/**
+ * Half a step of MRattleDrudeNoseHooverIntegrator's two chains: the first on KE_R = KE - KE_C
+ * (dof), the Drude chain on KE_C (drudeDof), twice KE from the partial sums and twice KE_C
+ * from the Drude groups' relative energies (CommonRigidBodyState::sumDrudeKineticEnergies);
+ * their factors into velocityScale[0] and [1] (a chain without degrees of freedom: 1). One
+ * work group.
+ */
+KERNEL void drudeNoseHooverChainsHalfStep(STATE_ARGUMENTS, int numGroups, GLOBAL const mixed* RESTRICT relative,
+        int chainLength, int positionOffset, int velocityOffset, int drudePositionOffset, int drudeVelocityOffset,
+        GLOBAL const mixed* RESTRICT weights, int numWeights, int numMTS, mixed dof, mixed kT, mixed frequency,
+        mixed drudeDof, mixed drudeKT, mixed drudeFrequency, mixed halfStep) {
+    LOCAL mixed sums[REDUCTION_THREADS];
+    LOCAL mixed relativeSums[REDUCTION_THREADS];
+    mixed sum = 0, relativeSum = 0;
+    const int count = partialCount[0];
+    for (int g = LOCAL_ID; g < count; g += LOCAL_SIZE)
+        sum += partials[2*g];
+    for (int g = LOCAL_ID; g < numGroups; g += LOCAL_SIZE)
+        relativeSum += relative[g];
+    sums[LOCAL_ID] = sum;
+    relativeSums[LOCAL_ID] = relativeSum;
+    sumOverGroup(sums, relativeSums);
+    if (LOCAL_ID != 0 || failure[0] != 0)
+        return;
+    mixed factor = 1, drudeFactor = 1;
+    if (dof > 0)
+        factor = propagateChain(integratorArrays + positionOffset, integratorArrays + velocityOffset, chainLength,
+                                sums[0] - relativeSums[0], weights, numWeights, numMTS, dof, kT, frequency, halfStep);
+    if (drudeDof > 0)
+        drudeFactor = propagateChain(integratorArrays + drudePositionOffset, integratorArrays + drudeVelocityOffset,
+                                     chainLength, relativeSums[0], weights, numWeights, numMTS, drudeDof, drudeKT,
+                                     drudeFrequency, halfStep);
+    setVelocityScale(factor, 0, velocityScale, failure, stepIndex);
+    setVelocityScale(drudeFactor, 1, velocityScale, failure, stepIndex);
 }
 
 /**
@@ -98,5 +146,5 @@ KERNEL void stochasticRescalingHalfStep(STATE_ARGUMENTS, GLOBAL const float4* RE
             alpha = -alpha;
         work[0] += newKinetic - kinetic;
     }
-    setVelocityScale(alpha, velocityScale, failure, stepIndex);
+    setVelocityScale(alpha, 0, velocityScale, failure, stepIndex);
 }
