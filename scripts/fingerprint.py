@@ -38,8 +38,8 @@ if hasattr(mrattle, 'MRattleDrudeLangevinIntegrator'):
     INTEGRATORS['MRattleDrudeLangevin'] = lambda: _seeded(mrattle.MRattleDrudeLangevinIntegrator(300, 5.0, 1, 20.0, 0.001))
     INTEGRATORS['MRattleDrudeNoseHoover'] = lambda: mrattle.MRattleDrudeNoseHooverIntegrator(300, 10.0, 1, 20.0, 0.001)
 # One CPU thread: OpenMM's CPU forces summed on several threads differ from run to run.
-# The baseline and the Drude integrators run on the host platforms only.
-HOST_ONLY = ('RigidSplitting', 'MRattleDrudeLangevin', 'MRattleDrudeNoseHoover')
+# The baseline runs on the host platforms only.
+HOST_ONLY = ('RigidSplitting',)
 PROPERTIES = {'CPU': {'Threads': '1'}, 'OpenCL': {'Precision': 'double'}}
 
 

@@ -28,7 +28,7 @@ vector<std::pair<int, int> > DrudeGroups::drudePairs(const System& system) {
     return found;
 }
 
-void DrudeGroups::requireSamePairs(const System& system, const char* integratorName) const {
+void DrudeGroups::requireNumDrudeParticles(const System& system, int numDrudeParticles, const char* integratorName) {
     // Counting is O(forces) a step; a pair's parameters changed in place are OpenMM's
     // updateParametersInContext's business, as for every other force.
     int count = 0;
@@ -37,9 +37,9 @@ void DrudeGroups::requireSamePairs(const System& system, const char* integratorN
         if (const auto* drude = dynamic_cast<const DrudeForce*>(&system.getForce(f)))
             count += drude->getNumParticles();
 #endif
-    if (count != (int) pairs.size())
+    if (count != numDrudeParticles)
         throw OpenMMException(std::string(integratorName) + ": the System has " + std::to_string(count) +
-                              " Drude particles but had " + std::to_string(pairs.size()) +
+                              " Drude particles but had " + std::to_string(numDrudeParticles) +
                               " when the Context was created (a DrudeForce added or changed since), which the "
                               "Context does not see; call Context.reinitialize()");
 }

@@ -5,8 +5,9 @@
 lists the platforms that have the plugin's kernels, then runs the 27-benzene cluster for
 20 steps of MRattleIntegrator and of MRattleNoseHooverIntegrator on each and compares the
 positions with Reference's, and 20 steps of MRattleBussiIntegrator (its random numbers are
-each platform's own: it must run and stay finite). Exits non-zero if a platform fails or
-disagrees.
+each platform's own: it must run and stay finite); where OpenMM has its Drude plugin, 8
+polarizable SWM4-NDP waters with MRattleDrudeNoseHooverIntegrator, compared likewise. Exits
+non-zero if a platform fails or disagrees.
 """
 import sys
 
@@ -22,18 +23,29 @@ AGREEMENT = {'double': 1e-8, 'mixed': 1e-6, 'single': 1e-4}
 STEPS = 20
 
 
-#: The integrators run: name, how to make it, whether its run is deterministic (compared with Reference's).
-INTEGRATORS = (
-    ('MRattleIntegrator', lambda: mrattle.MRattleIntegrator(2*unit.femtoseconds), True),
+#: The integrators run: name, how to make it, whether its run is deterministic (compared with
+#: Reference's), the model it runs (a mrattle.models builder; bodies from rigidBodies() where not water).
+INTEGRATORS = [
+    ('MRattleIntegrator', lambda: mrattle.MRattleIntegrator(2*unit.femtoseconds), True,
+     mrattle.models.benzeneCluster),
     ('MRattleNoseHooverIntegrator',
-     lambda: mrattle.MRattleNoseHooverIntegrator(300*unit.kelvin, 10/unit.picosecond, 2*unit.femtoseconds), True),
+     lambda: mrattle.MRattleNoseHooverIntegrator(300*unit.kelvin, 10/unit.picosecond, 2*unit.femtoseconds), True,
+     mrattle.models.benzeneCluster),
     ('MRattleBussiIntegrator',
-     lambda: mrattle.MRattleBussiIntegrator(300*unit.kelvin, 10/unit.picosecond, 2*unit.femtoseconds), False),
-)
+     lambda: mrattle.MRattleBussiIntegrator(300*unit.kelvin, 10/unit.picosecond, 2*unit.femtoseconds), False,
+     mrattle.models.benzeneCluster),
+]
+if hasattr(mrattle, 'MRattleDrudeNoseHooverIntegrator'):
+    INTEGRATORS.append(('MRattleDrudeNoseHooverIntegrator',
+                        lambda: mrattle.MRattleDrudeNoseHooverIntegrator(300*unit.kelvin, 10/unit.picosecond, 1*unit.kelvin,
+                                                                         20/unit.picosecond, 1*unit.femtoseconds),
+                        True, mrattle.models.swm4ndpWater))
 
 
 def runOn(platformName, model, makeIntegrator):
     integrator = makeIntegrator()
+    if hasattr(integrator, 'computeDrudeTemperature'):   # its Drude particles stay out of the bodies
+        mrattle.declareRigidBodies(integrator, model.topology, model.system)
     context = openmm.Context(model.system, integrator, openmm.Platform.getPlatformByName(platformName))
     context.setPositions(model.positions)
     context.setVelocitiesToTemperature(300*unit.kelvin, 1)
@@ -45,10 +57,10 @@ def main():
     print('OpenMM %s, M-RATTLE plugin %s from %s' % (openmm.Platform.getOpenMMVersion(), mrattle.__version__,
                                                       mrattle.__file__))
     print('Platforms with the plugin\'s kernels: %s' % ', '.join(mrattle.PLATFORMS))
-    model = mrattle.models.benzeneCluster()
     failures = 0
-    for integratorName, makeIntegrator, deterministic in INTEGRATORS:
+    for integratorName, makeIntegrator, deterministic, makeModel in INTEGRATORS:
         print('%s:' % integratorName)
+        model = makeModel()
         reference = runOn('Reference', model, makeIntegrator)
         for name in mrattle.PLATFORMS:
             try:

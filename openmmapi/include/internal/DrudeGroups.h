@@ -47,11 +47,12 @@ public:
         return pairs.size();
     }
     /**
-     * Throws an OpenMMException if the System's DrudeForce pairs are not those these groups
-     * were made from: a DrudeForce added or edited after the Context was created, which the
-     * Context does not see until Context::reinitialize(). A step calls it before moving anything.
+     * Throws an OpenMMException unless the System's DrudeForces hold numDrudeParticles pairs, the
+     * number a step kernel was made with: a DrudeForce added or given pairs after the Context was
+     * created, which the Context does not see until Context::reinitialize(). O(forces); a step
+     * calls it before moving anything.
      */
-    void requireSamePairs(const OpenMM::System& system, const char* integratorName) const;
+    static void requireNumDrudeParticles(const OpenMM::System& system, int numDrudeParticles, const char* integratorName);
     /** Whether the particle is in a group (its velocity is split; every other one is at the system's temperature). */
     bool isGrouped(int particle) const {
         return particle < (int) grouped.size() && grouped[particle];

@@ -111,6 +111,9 @@ public:
     void initialize(const OpenMM::System& system, const RigidBodyTopology& topology,
                     const RigidBodyIntegrator& integrator) override;
     void execute(OpenMM::ContextImpl& context, const RigidBodyIntegrator& integrator, bool& forcesAreValid) override;
+
+private:
+    int numDrudes = 0;
 };
 
 /**

@@ -5,6 +5,7 @@
 #include "internal/DrudeGroups.h"
 #include "internal/RigidBodyThermostats.h"
 #include "openmm/common/ContextSelector.h"
+#include "openmm/internal/ContextImpl.h"
 #include "openmm/reference/SimTKOpenMMRealType.h"
 
 using namespace MRattlePlugin;
@@ -16,6 +17,7 @@ using std::vector;
 void CommonIntegrateMRattleDrudeLangevinStepKernel::initialize(const System& system, const RigidBodyTopology& topology,
                                                                const RigidBodyIntegrator& integrator) {
     const DrudeGroups groups(system, topology, IntegratorNames::MRattleDrudeLangevin.integrator);
+    numDrudes = groups.getNumDrudeParticles();
     ContextSelector selector(state.computeContext());
     state.initialize(system, topology, CommonMRattleKernelSources::drude);
     state.setDrudeGroups(groups);
@@ -28,6 +30,7 @@ void CommonIntegrateMRattleDrudeLangevinStepKernel::execute(ContextImpl& context
     ContextSelector selector(state.computeContext());
     const double h = integrator.getStepSize(), tolerance = integrator.getConstraintTolerance();
     const double friction = integrator.getFriction(), drudeFriction = integrator.getDrudeFriction();
+    DrudeGroups::requireNumDrudeParticles(context.getSystem(), numDrudes, IntegratorNames::MRattleDrudeLangevin.integrator);
     // MRattleLangevinIntegrator's step with the split noise (a kernel of its own between two
     // passes), then the hard wall after the drift (another) and the projection (a third pass).
     state.beginStep(context, integrator, forcesAreValid);
@@ -101,6 +104,7 @@ void CommonIntegrateMRattleDrudeNoseHooverStepKernel::execute(ContextImpl& conte
     // The chains' half step, velocity Verlet (MRattleIntegrator's) with the hard wall after the
     // drift, the chains' half step; both chains uncoupled (at rest): MRattleIntegrator's step.
     const bool coupled = integrator.getCollisionFrequency() != 0 || integrator.getDrudeCollisionFrequency() != 0;
+    DrudeGroups::requireNumDrudeParticles(context.getSystem(), numDrudes, IntegratorNames::MRattleDrudeNoseHoover.integrator);
     state.beginStep(context, integrator, forcesAreValid);
     if (coupled)
         chainsHalfStep(integrator);

@@ -156,7 +156,8 @@ void ReferenceIntegrateMRattleDrudeLangevinStepKernel::execute(ContextImpl& cont
     const MRattleDrudeLangevinIntegrator& integrator = static_cast<const MRattleDrudeLangevinIntegrator&>(bound);
     const double h = integrator.getStepSize(), tolerance = integrator.getConstraintTolerance();
     const double friction = integrator.getFriction(), drudeFriction = integrator.getDrudeFriction();
-    groups.requireSamePairs(context.getSystem(), IntegratorNames::MRattleDrudeLangevin.integrator);
+    DrudeGroups::requireNumDrudeParticles(context.getSystem(), groups.getNumDrudeParticles(),
+                                          IntegratorNames::MRattleDrudeLangevin.integrator);
     // MRattleLangevinIntegrator's step with the split noise, then the hard wall after the drift
     // (the forces, as there, at the next step's start).
     state.beginStep(context, integrator, forcesAreValid);
@@ -217,7 +218,8 @@ void ReferenceIntegrateMRattleDrudeNoseHooverStepKernel::execute(ContextImpl& co
                                                                  bool& forcesAreValid) {
     const MRattleDrudeNoseHooverIntegrator& integrator = static_cast<const MRattleDrudeNoseHooverIntegrator&>(bound);
     const double h = integrator.getStepSize(), tolerance = integrator.getConstraintTolerance();
-    groups.requireSamePairs(context.getSystem(), IntegratorNames::MRattleDrudeNoseHoover.integrator);
+    DrudeGroups::requireNumDrudeParticles(context.getSystem(), groups.getNumDrudeParticles(),
+                                          IntegratorNames::MRattleDrudeNoseHoover.integrator);
     // The chains' half step, velocity Verlet (MRattleIntegrator's) with the hard wall after
     // the drift, the chains' half step.
     state.beginStep(context, integrator, forcesAreValid);
