@@ -70,8 +70,7 @@ class Temperatures:
         return self.scratch.getState(getVelocities=True).getVelocities()
 
     def __call__(self, state, shift=False):
-        """(body T, Drude T); shift: the velocities moved by h/2 and constrained, as OpenMM 7.7's
-        DrudeLangevinIntegrator reports its kinetic energy (8.x: computeShiftedVelocities)."""
+        """(body T, Drude T); shift: the velocities moved by h/2 and constrained (computeShiftedVelocities)."""
         v = state.getVelocities(asNumpy=True).value_in_unit(unit.nanometer / unit.picosecond)
         if shift:
             f = state.getForces(asNumpy=True).value_in_unit(unit.kilojoule_per_mole / unit.nanometer)
@@ -103,8 +102,10 @@ def replica(name, model, start, seed, s, npt):
         a, b, cc = state.getPeriodicBoxVectors(asNumpy=True).value_in_unit(unit.nanometer)
         row = dict(U=state.getPotentialEnergy().value_in_unit(unit.kilojoule_per_mole) / len(bodies),
                    density=temperatures.m.sum() * 1.66053906660e-3 / (a[0] * b[1] * cc[2]))  # g/mL
-        if not npt:
-            row['T_body'], row['T_drude'] = temperatures(state, shift=name == ('Langevin', False))
+        if not npt:  # the velocities as they are (OpenMM 8's computeDrudeTemperature()) and, for DrudeLangevin,
+            row['T_body'], row['T_drude'] = temperatures(state)  # shifted by h/2 as its getKineticEnergy() (7.7, 8)
+            if name == ('Langevin', False):
+                row['shifted_T_body'], row['shifted_T_drude'] = temperatures(state, shift=True)
             if name[1]:
                 row['own_T_body'] = it.computeBodyTemperature().value_in_unit(unit.kelvin)
                 row['own_T_drude'] = it.computeDrudeTemperature().value_in_unit(unit.kelvin)
@@ -153,8 +154,9 @@ def run(quick, out, log):
              '1 thread. Each integrator: %d replicas (seeds and starting velocities) from one start after %g ps of '
              'OpenMM\'s DrudeLangevin; each %g ps of its own equilibration, then %g ps NVT (sampled every %d fs), and '
              'the same from an NPT start (MonteCarloBarostat, 1 bar, every 25 steps) for %g ps NPT. Means +- standard '
-             'errors over the replicas. Temperatures: one formula (OpenMM\'s) for both sides, from each integrator\'s '
-             'velocities as it reports them (DrudeLangevin\'s shifted by h/2). Cost: median of %d interleaved batches '
+             'errors over the replicas. Temperatures: one formula (OpenMM 8\'s computeSystemTemperature() and '
+             'computeDrudeTemperature()) for both sides, from the velocities the integrators keep. Cost: median of %d '
+             'interleaved batches '
              'of 100 steps.%s\n' % (
                  ' --quick' if quick else '', datetime.datetime.utcnow().strftime('%Y-%m-%d %H:%M'),
                  subprocess.run(['git', 'rev-parse', '--short', 'HEAD'], capture_output=True, text=True,
@@ -173,6 +175,10 @@ def run(quick, out, log):
                 title, digits, a, digits, ea, digits, b, digits, eb, (a - b) / math.hypot(ea, eb)))
         lines.append('| the plugin\'s own computeBodyTemperature(), computeDrudeTemperature() (K) | %.2f +- %.2f, '
                      '%.3f +- %.3f | | |' % (*mean_se(ours, 'own_T_body'), *mean_se(ours, 'own_T_drude')))
+        if thermostat == 'Langevin':
+            lines.append('| DrudeLangevin\'s velocities shifted by h/2, as its getKineticEnergy(): body, Drude T '
+                         '(K) | | %.2f +- %.2f, %.3f +- %.3f | |' % (*mean_se(theirs, 'shifted_T_body'),
+                                                                 *mean_se(theirs, 'shifted_T_drude')))
         ms = [1e3 * per_step[(thermostat, p)] for p in (True, False)]
         lines.append('| cost per step, CPU, 1 thread, PME included (ms) | %.2f | %.2f | ratio %.2f (target <= 1.2) |'
                      % (ms[0], ms[1], ms[0] / ms[1]))
