@@ -16,8 +16,10 @@ from .common import KB, TEMPERATURE, context, interleaved_median, machine_descri
 STEP, DRUDE_T, WALL = 0.001, 1.0, 0.02  # ps, K, nm: OpenMM's tests' settings and its default hard wall
 COUPLING = {'Langevin': (1.0, 10.0), 'Nose-Hoover': (1.0, 10.0)}  # 1/ps: the bodies', the Drude particles'
 # steps (1 fs): common NVT and NPT equilibration, each replica's own equilibration and production, sample stride
-FULL = dict(box=1.9, equilibrate=15000, settle=2000, nvt=8000, npt=8000, sample=20, replicas=4, batches=7)
-QUICK = dict(box=1.9, equilibrate=500, settle=200, nvt=200, npt=200, sample=20, replicas=2, batches=2)
+FULL = dict(box=1.9, step=STEP, equilibrate=15000, settle=2000, nvt=8000, npt=8000, sample=20, replicas=4, batches=7,
+            small=dict(step=STEP / 4, settle=1200, nvt=1200, sample=40, replicas=3))  # the Drude T at 0.25 fs
+QUICK = dict(box=1.9, step=STEP, equilibrate=500, settle=200, nvt=200, npt=200, sample=20, replicas=2, batches=2,
+             small=dict(step=STEP / 4, settle=200, nvt=200, sample=40, replicas=2))
 
 
 def swm4ndp(box_nm):
@@ -33,11 +35,11 @@ def swm4ndp(box_nm):
     return system, modeller.positions, pairs, mrattle.rigidBodies(modeller.topology, system, atoms=['O', 'H1', 'H2'])
 
 
-def integrator(name, bodies, seed):
+def integrator(name, bodies, seed, step=STEP):
     """The four integrators by name: (thermostat, plugin or not)."""
     thermostat, plugin = name
     cls = getattr(mrattle if plugin else openmm, 'MRattle' * plugin + 'Drude%sIntegrator' % thermostat.replace('-', ''))
-    result = cls(TEMPERATURE, COUPLING[thermostat][0], DRUDE_T, COUPLING[thermostat][1], STEP)
+    result = cls(TEMPERATURE, COUPLING[thermostat][0], DRUDE_T, COUPLING[thermostat][1], step)
     result.setMaxDrudeDistance(WALL)
     if thermostat == 'Langevin':
         result.setRandomNumberSeed(seed)
@@ -69,13 +71,13 @@ class Temperatures:
         self.scratch.setVelocitiesToTemperature(TEMPERATURE, seed)
         return self.scratch.getState(getVelocities=True).getVelocities()
 
-    def __call__(self, state, shift=False):
-        """(body T, Drude T); shift: the velocities moved by h/2 and constrained (computeShiftedVelocities)."""
+    def __call__(self, state, shift=0.0):
+        """(body T, Drude T); shift: the step h, the velocities moved by h/2 and constrained."""
         v = state.getVelocities(asNumpy=True).value_in_unit(unit.nanometer / unit.picosecond)
         if shift:
             f = state.getForces(asNumpy=True).value_in_unit(unit.kilojoule_per_mole / unit.nanometer)
             massive = self.m > 0
-            v[massive] += 0.5 * STEP * f[massive] / self.m[massive, None]
+            v[massive] += 0.5 * shift * f[massive] / self.m[massive, None]
             self.scratch.setPositions(state.getPositions())
             self.scratch.setVelocities(v)
             self.scratch.applyVelocityConstraints(1e-10)
@@ -90,7 +92,7 @@ def replica(name, model, start, seed, s, npt):
     """One replica's means: from the common start, new velocities (seed; drawn OpenMM's way for both sides: the
     plugin's setVelocitiesToTemperature gives the Drude particles the main temperature), its own equilibration."""
     system, pairs, bodies, temperatures = model
-    it = integrator(name, bodies, seed)
+    it = integrator(name, bodies, seed, s['step'])
     c = context(system, it, start[0], None, 'CPU', 1)
     c.setPeriodicBoxVectors(*start[1])
     c.setVelocities(temperatures.thermal(start[0], seed))
@@ -105,7 +107,7 @@ def replica(name, model, start, seed, s, npt):
         if not npt:  # the velocities as they are (OpenMM 8's computeDrudeTemperature()) and, for DrudeLangevin,
             row['T_body'], row['T_drude'] = temperatures(state)  # shifted by h/2 as its getKineticEnergy() (7.7, 8)
             if name == ('Langevin', False):
-                row['shifted_T_body'], row['shifted_T_drude'] = temperatures(state, shift=True)
+                row['shifted_T_body'], row['shifted_T_drude'] = temperatures(state, shift=s['step'])
             if name[1]:
                 row['own_T_body'] = it.computeBodyTemperature().value_in_unit(unit.kelvin)
                 row['own_T_drude'] = it.computeDrudeTemperature().value_in_unit(unit.kelvin)
@@ -141,6 +143,8 @@ def run(quick, out, log):
                                   s['batches'])
     del contexts
     means = {n: [replica(n, model, nvt_start, 11 + r, s, False) for r in range(s['replicas'])] for n in names}
+    small = {n: [replica(n, model, nvt_start, 31 + r, s['small'], False) for r in range(s['small']['replicas'])]
+             for n in names}
     log('drude: NVT replicas done')
     system.addForce(openmm.MonteCarloBarostat(1 * unit.bar, TEMPERATURE * unit.kelvin, 25))
     npt_start = equilibrate(system, nvt_start[0], s['equilibrate'], seed=2)
@@ -168,11 +172,14 @@ def run(quick, out, log):
         lines += ['\n## %s (%g/ps, Drude %g/ps): MRattleDrude%sIntegrator against Drude%sIntegrator + SETTLE\n' % (
             thermostat, gamma, drude_gamma, *[thermostat.replace('-', '')] * 2),
             '| quantity | M-RATTLE | OpenMM + SETTLE | difference / combined SE |', '|---|---|---|---|']
-        for key, title, digits in (('U', 'potential energy per molecule (kJ/mol)', 3), ('T_body', 'body temperature (K)',
-                                   2), ('T_drude', 'Drude temperature (K)', 3), ('density', 'density, NPT 1 bar (g/mL)', 4)):
+        for key, title, digits in (('U', 'potential energy per molecule (kJ/mol)', 3), ('T_body', 'body T (K)', 2),
+                                   ('T_drude', 'Drude T (K)', 3), ('density', 'density, NPT 1 bar (g/mL)', 4)):
             (a, ea), (b, eb) = mean_se(ours, key), mean_se(theirs, key)
             lines.append('| %s | %.*f +- %.*f | %.*f +- %.*f | %+.1f |' % (
                 title, digits, a, digits, ea, digits, b, digits, eb, (a - b) / math.hypot(ea, eb)))
+        (a, ea), (b, eb) = mean_se(small[(thermostat, True)], 'T_drude'), mean_se(small[(thermostat, False)], 'T_drude')
+        lines.append('| Drude T at 0.25 fs, %d replicas of %g ps (K) | %.3f +- %.3f | %.3f +- %.3f | %+.1f |' % (
+            s['small']['replicas'], s['small']['nvt'] * s['small']['step'], a, ea, b, eb, (a - b) / math.hypot(ea, eb)))
         lines.append('| the plugin\'s own computeBodyTemperature(), computeDrudeTemperature() (K) | %.2f +- %.2f, '
                      '%.3f +- %.3f | | |' % (*mean_se(ours, 'own_T_body'), *mean_se(ours, 'own_T_drude')))
         if thermostat == 'Langevin':
