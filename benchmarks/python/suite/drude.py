@@ -11,7 +11,7 @@ import openmm
 from openmm import app, unit
 
 import mrattle
-from .common import KB, TEMPERATURE, context, interleaved_median, machine_description, masses as masses_of
+from .common import KB, TEMPERATURE, context, interleaved, machine_description, masses as masses_of
 
 STEP, DRUDE_T, WALL = 0.001, 1.0, 0.02  # ps, K, nm: OpenMM's tests' settings and its default hard wall
 COUPLING = {'Langevin': (1.0, 10.0), 'Nose-Hoover': (1.0, 10.0)}  # 1/ps: the bodies', the Drude particles'
@@ -139,8 +139,8 @@ def run(quick, out, log):
     nvt_start = equilibrate(system, positions, s['equilibrate'])
     contexts = {n: context(system, integrator(n, bodies, 1), nvt_start[0], model[3].thermal(nvt_start[0], 1), 'CPU', 1)
                 for n in names}  # the cost first, while nothing else of this run is running
-    per_step = interleaved_median({n: c.getIntegrator() for n, c in contexts.items()}, dict.fromkeys(names, 100),
-                                  s['batches'])
+    per_step = {n: float(np.median(t)) for n, t in interleaved(
+        {n: c.getIntegrator() for n, c in contexts.items()}, dict.fromkeys(names, 100), s['batches']).items()}
     del contexts
     means = {n: [replica(n, model, nvt_start, 11 + r, s, False) for r in range(s['replicas'])] for n in names}
     small = {n: [replica(n, model, nvt_start, 31 + r, s['small'], False) for r in range(s['small']['replicas'])]
