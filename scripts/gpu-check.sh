@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# The GPU check (docs/platforms.md, "Running the GPU check"), in two steps:
+# The GPU check (docs/cuda.md, "The GPU check"), in two steps:
 #
 #   scripts/gpu-check.sh stage [BUILD_DIR]   here, after building against an OpenMM with CUDA
 #       (BUILD_DIR default ./build-cuda): copies what the GPU machine needs into ./.gpu/
