@@ -189,7 +189,9 @@ TEST_P(Thermostat, CheckpointRestartsBitForBit) {
 
 TEST_P(Thermostat, RunsInACompoundIntegratorAndWithABarostat) {
     Cluster c = waterBox();
-    c.system->addForce(new MonteCarloBarostat(1.0, 300, 5));
+    MonteCarloBarostat* barostat = new MonteCarloBarostat(1.0, 300, 5);
+    barostat->setRandomNumberSeed(3);   // seeded: 40 attempts, of which none accepted was a rare failure
+    c.system->addForce(barostat);
     CompoundIntegrator compound;
     compound.addIntegrator(makeThermostat(300, 10.0, 0.001).release());
     compound.addIntegrator(new MRattleIntegrator(0.001));
