@@ -2,7 +2,6 @@
 #include "internal/DrudeGroups.h"
 #include "internal/RigidBodyKernels.h"
 #include "openmm/OpenMMException.h"
-#include <cmath>
 
 using namespace MRattlePlugin;
 using namespace OpenMM;
@@ -57,11 +56,4 @@ double MRattleDrudeLangevinIntegrator::computeBodyTemperature() {
     int numDrudes;
     const double relative = relativeKineticEnergy(numDrudes);
     return DrudeGroups::bodyTemperature(computeKineticEnergy(), relative, getNumDegreesOfFreedom(), numDrudes);
-}
-
-std::vector<Vec3> MRattleDrudeLangevinIntegrator::getVelocitiesForTemperature(const System& system, double temperature, int randomSeed) const {
-    std::vector<Vec3> velocities = RigidBodyIntegrator::getVelocitiesForTemperature(system, temperature, randomSeed);
-    DrudeGroups::scaleRelativeMotion(*context, getTopology(), getIntegratorName(),
-                                     temperature > 0 ? std::sqrt(drudeTemperature / temperature) : 0.0, velocities);
-    return velocities;
 }

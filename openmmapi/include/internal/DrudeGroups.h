@@ -73,12 +73,6 @@ public:
      */
     static double contextRelativeKineticEnergy(OpenMM::ContextImpl& context, const RigidBodyTopology& topology,
                                                const char* integratorName, int& numDrudes);
-    /**
-     * Scales the relative part (v - v_R) of every group's velocities v, set for a Context's
-     * positions, by factor: the Drude particles' relative motion drawn at a temperature of its own.
-     */
-    static void scaleRelativeMotion(OpenMM::ContextImpl& context, const RigidBodyTopology& topology,
-                                    const char* integratorName, double factor, std::vector<OpenMM::Vec3>& v);
     /** The Drude temperature 2 KE_C / (3 n_drude k_B), in K (0 without Drude particles). */
     static double drudeTemperature(double relativeKineticEnergy, int numDrudes);
     /**
