@@ -92,8 +92,6 @@ public:
     }
 
 private:
-    /** KE_C (kJ/mol) and the number of Drude particles of the bound Context. */
-    double relativeKineticEnergy(int& numDrudes);
     double temperature, friction, drudeTemperature, drudeFriction, maxDrudeDistance = 0;
     int randomNumberSeed = 0;
 };

@@ -103,8 +103,6 @@ public:
     double computeHeatBathEnergy();
 
 private:
-    /** KE_C (kJ/mol) and the number of Drude particles of the bound Context. */
-    double relativeKineticEnergy(int& numDrudes);
     double temperature, collisionFrequency, drudeTemperature, drudeCollisionFrequency, maxDrudeDistance = 0.02;
     int chainLength, numMTS, numYoshidaSuzuki;
 };

@@ -156,11 +156,17 @@ double DrudeGroups::contextRelativeKineticEnergy(ContextImpl& context, const Rig
     return groups.relativeKineticEnergy(x, v, masses);
 }
 
-double DrudeGroups::drudeTemperature(double relativeKineticEnergy, int numDrudes) {
-    return numDrudes == 0 ? 0.0 : 2 * relativeKineticEnergy / (3 * numDrudes * BOLTZ);
+double DrudeGroups::drudeTemperature(ContextImpl& context, const RigidBodyTopology& topology,
+                                     const char* integratorName) {
+    int numDrudes;
+    const double relative = contextRelativeKineticEnergy(context, topology, integratorName, numDrudes);
+    return numDrudes == 0 ? 0.0 : 2 * relative / (3 * numDrudes * BOLTZ);
 }
 
-double DrudeGroups::bodyTemperature(double kineticEnergy, double relativeKineticEnergy, int dof, int numDrudes) {
+double DrudeGroups::bodyTemperature(ContextImpl& context, const RigidBodyTopology& topology, const char* integratorName,
+                                    double kineticEnergy, int dof) {
+    int numDrudes;
+    const double relative = contextRelativeKineticEnergy(context, topology, integratorName, numDrudes);
     const int bodyDof = dof - 3 * numDrudes;
-    return bodyDof <= 0 ? 0.0 : 2 * (kineticEnergy - relativeKineticEnergy) / (bodyDof * BOLTZ);
+    return bodyDof <= 0 ? 0.0 : 2 * (kineticEnergy - relative) / (bodyDof * BOLTZ);
 }

@@ -42,18 +42,11 @@ void MRattleDrudeLangevinIntegrator::setMaxDrudeDistance(double distance) {
     maxDrudeDistance = distance;
 }
 
-double MRattleDrudeLangevinIntegrator::relativeKineticEnergy(int& numDrudes) {
-    return DrudeGroups::contextRelativeKineticEnergy(*context, getTopology(), getIntegratorName(), numDrudes);
-}
-
 double MRattleDrudeLangevinIntegrator::computeDrudeTemperature() {
-    int numDrudes;
-    const double relative = relativeKineticEnergy(numDrudes);
-    return DrudeGroups::drudeTemperature(relative, numDrudes);
+    return DrudeGroups::drudeTemperature(*context, getTopology(), getIntegratorName());
 }
 
 double MRattleDrudeLangevinIntegrator::computeBodyTemperature() {
-    int numDrudes;
-    const double relative = relativeKineticEnergy(numDrudes);
-    return DrudeGroups::bodyTemperature(computeKineticEnergy(), relative, getNumDegreesOfFreedom(), numDrudes);
+    return DrudeGroups::bodyTemperature(*context, getTopology(), getIntegratorName(), computeKineticEnergy(),
+                                        getNumDegreesOfFreedom());
 }

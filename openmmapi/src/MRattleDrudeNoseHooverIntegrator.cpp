@@ -23,16 +23,7 @@ MRattleDrudeNoseHooverIntegrator::MRattleDrudeNoseHooverIntegrator(double temper
     setDrudeTemperature(drudeTemperature);
     setDrudeCollisionFrequency(drudeCollisionFrequency);
     setStepSize(stepSize);
-    if (chainLength < 1)
-        throw OpenMMException(std::string(ClassName) + ": the chain length must be 1 or more, got " +
-                              std::to_string(chainLength));
-    if (numMTS < 1)
-        throw OpenMMException(std::string(ClassName) + ": the number of multiple time steps must be 1 or more, got " +
-                              std::to_string(numMTS));
-    if (!RigidBodyThermostats::isSupportedYoshidaSuzukiOrder(numYoshidaSuzuki))
-        throw OpenMMException(std::string(ClassName) +
-                              ": the number of Yoshida-Suzuki time steps must be 1, 3, 5 or 7, got " +
-                              std::to_string(numYoshidaSuzuki));
+    RigidBodyThermostats::requireChainSettings(ClassName, chainLength, numMTS, numYoshidaSuzuki);
 }
 
 void MRattleDrudeNoseHooverIntegrator::setTemperature(double value) {
@@ -60,20 +51,13 @@ void MRattleDrudeNoseHooverIntegrator::setMaxDrudeDistance(double distance) {
     maxDrudeDistance = distance;
 }
 
-double MRattleDrudeNoseHooverIntegrator::relativeKineticEnergy(int& numDrudes) {
-    return DrudeGroups::contextRelativeKineticEnergy(*context, getTopology(), getIntegratorName(), numDrudes);
-}
-
 double MRattleDrudeNoseHooverIntegrator::computeDrudeTemperature() {
-    int numDrudes;
-    const double relative = relativeKineticEnergy(numDrudes);
-    return DrudeGroups::drudeTemperature(relative, numDrudes);
+    return DrudeGroups::drudeTemperature(*context, getTopology(), getIntegratorName());
 }
 
 double MRattleDrudeNoseHooverIntegrator::computeBodyTemperature() {
-    int numDrudes;
-    const double relative = relativeKineticEnergy(numDrudes);
-    return DrudeGroups::bodyTemperature(computeKineticEnergy(), relative, getNumDegreesOfFreedom(), numDrudes);
+    return DrudeGroups::bodyTemperature(*context, getTopology(), getIntegratorName(), computeKineticEnergy(),
+                                        getNumDegreesOfFreedom());
 }
 
 double MRattleDrudeNoseHooverIntegrator::computeHeatBathEnergy() {

@@ -19,15 +19,7 @@ MRattleNoseHooverIntegrator::MRattleNoseHooverIntegrator(double temperature, dou
     setTemperature(temperature);
     setCollisionFrequency(collisionFrequency);
     setStepSize(stepSize);
-    if (chainLength < 1)
-        throw OpenMMException(std::string(ClassName) + ": the chain length must be 1 or more, got " +
-                              std::to_string(chainLength));
-    if (numMTS < 1)
-        throw OpenMMException(std::string(ClassName) + ": the number of multiple time steps must be 1 or more, got " +
-                              std::to_string(numMTS));
-    if (!RigidBodyThermostats::isSupportedYoshidaSuzukiOrder(numYoshidaSuzuki))
-        throw OpenMMException(std::string(ClassName) + ": the number of Yoshida-Suzuki time steps must be 1, 3, 5 or 7, got " +
-                              std::to_string(numYoshidaSuzuki));
+    RigidBodyThermostats::requireChainSettings(ClassName, chainLength, numMTS, numYoshidaSuzuki);
 }
 
 void MRattleNoseHooverIntegrator::setTemperature(double value) {

@@ -1,6 +1,7 @@
 #include "internal/RigidBodyThermostats.h"
 #include "openmm/OpenMMException.h"
 #include <cmath>
+#include <string>
 
 using namespace MRattlePlugin;
 using OpenMM::OpenMMException;
@@ -8,6 +9,19 @@ using std::vector;
 
 bool RigidBodyThermostats::isSupportedYoshidaSuzukiOrder(int order) {
     return order == 1 || order == 3 || order == 5 || order == 7;
+}
+
+void RigidBodyThermostats::requireChainSettings(const char* integratorName, int chainLength, int numMTS,
+                                                int numYoshidaSuzuki) {
+    const std::string name(integratorName);
+    if (chainLength < 1)
+        throw OpenMMException(name + ": the chain length must be 1 or more, got " + std::to_string(chainLength));
+    if (numMTS < 1)
+        throw OpenMMException(name + ": the number of multiple time steps must be 1 or more, got " +
+                              std::to_string(numMTS));
+    if (!isSupportedYoshidaSuzukiOrder(numYoshidaSuzuki))
+        throw OpenMMException(name + ": the number of Yoshida-Suzuki time steps must be 1, 3, 5 or 7, got " +
+                              std::to_string(numYoshidaSuzuki));
 }
 
 vector<double> RigidBodyThermostats::yoshidaSuzukiWeights(int order) {

@@ -67,21 +67,24 @@ public:
     double relativeKineticEnergy(const std::vector<OpenMM::Vec3>& x, const std::vector<OpenMM::Vec3>& v,
                                  const std::vector<double>& masses) const;
     /**
-     * KE_C (kJ/mol) of a Context's positions and velocities, on any platform (a host
-     * computation, as a reporter's), and its number of Drude particles: what the Drude
-     * integrators' computeDrudeTemperature() and computeBodyTemperature() read.
+     * The Drude temperature 2 KE_C / (3 n_drude k_B) of a Context, in K (0 without Drude
+     * particles): a host computation on any platform, as a reporter's; what the Drude
+     * integrators' computeDrudeTemperature() returns.
      */
-    static double contextRelativeKineticEnergy(OpenMM::ContextImpl& context, const RigidBodyTopology& topology,
-                                               const char* integratorName, int& numDrudes);
-    /** The Drude temperature 2 KE_C / (3 n_drude k_B), in K (0 without Drude particles). */
-    static double drudeTemperature(double relativeKineticEnergy, int numDrudes);
+    static double drudeTemperature(OpenMM::ContextImpl& context, const RigidBodyTopology& topology,
+                                   const char* integratorName);
     /**
-     * The bodies' and free particles' temperature 2 (KE - KE_C) / ((dof - 3 n_drude) k_B), in
-     * K (0 without such degrees of freedom), for dof degrees of freedom in all.
+     * The bodies' and free particles' temperature 2 (KE - KE_C) / ((dof - 3 n_drude) k_B) of a
+     * Context, in K (0 without such degrees of freedom), given its kinetic energy KE and dof
+     * degrees of freedom in all: what computeBodyTemperature() returns.
      */
-    static double bodyTemperature(double kineticEnergy, double relativeKineticEnergy, int dof, int numDrudes);
+    static double bodyTemperature(OpenMM::ContextImpl& context, const RigidBodyTopology& topology,
+                                  const char* integratorName, double kineticEnergy, int dof);
 
 private:
+    /** KE_C (kJ/mol) of a Context's positions and velocities, and its number of Drude particles. */
+    static double contextRelativeKineticEnergy(OpenMM::ContextImpl& context, const RigidBodyTopology& topology,
+                                               const char* integratorName, int& numDrudes);
     static std::vector<std::pair<int, int> > drudePairs(const OpenMM::System& system);
     std::vector<Group> groups;
     std::vector<std::pair<int, int> > pairs;

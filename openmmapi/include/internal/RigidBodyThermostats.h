@@ -20,6 +20,9 @@ namespace RigidBodyThermostats {
 
 /** The Yoshida-Suzuki orders the Nose-Hoover chain's factorisation supports. */
 OPENMM_EXPORT_MRATTLE bool isSupportedYoshidaSuzukiOrder(int order);
+/** Throws an OpenMMException naming the integrator unless chainLength >= 1, numMTS >= 1 and the order is supported. */
+OPENMM_EXPORT_MRATTLE void requireChainSettings(const char* integratorName, int chainLength, int numMTS,
+                                                int numYoshidaSuzuki);
 /** The Yoshida-Suzuki weights of order 1, 3, 5 or 7 (they sum to 1); throws an OpenMMException otherwise. */
 OPENMM_EXPORT_MRATTLE std::vector<double> yoshidaSuzukiWeights(int order);
 
