@@ -87,8 +87,8 @@ public:
     /** The hard wall after the drift (nothing if maxDistance <= 0); beyond twice it the step fails. */
     void bounceDrudes(double maxDistance, double drudeTemperature, double h);
     /**
-     * sumKineticEnergy(), and twice each Drude group's KE_C into drudeRelativeEnergies(), for a
-     * two-chain thermostat's kernel (which puts its factors for R and C into velocityScale[0], [1]).
+     * sumKineticEnergy(), and twice the Drude groups' KE_C summed per work group into
+     * drudeRelativeEnergies() (their count in drudeRelativeCount()), for a two-chain thermostat's kernel (which puts its factors for R and C into velocityScale[0], [1]).
      */
     void sumDrudeKineticEnergies();
     /** Every Drude group's R scaled by velocityScale[0], its C by velocityScale[1]; every other atom by [0]. */
@@ -129,12 +129,12 @@ public:
      * initialize() with CommonMRattleKernelSources::drude among its sources.
      */
     void setDrudeGroups(const DrudeGroups& groups);
-    /** Twice each Drude group's KE_C, as sumDrudeKineticEnergies() leaves it (one per group). */
+    /** Twice the Drude groups' KE_C, as sumDrudeKineticEnergies() leaves it (one partial sum per work group). */
     OpenMM::ComputeArray& drudeRelativeEnergies() {
         return drudeRelative;
     }
-    int numDrudeGroups() const {
-        return numDrudeGroupsOnDevice;
+    OpenMM::ComputeArray& drudeRelativeCount() {
+        return drudeRelativeCountArray;
     }
     /** Launch an integrator kernel (made with integratorArguments) in the step's order. */
     void launch(OpenMM::ComputeKernel& kernel, int workItems, int groupSize = -1);
@@ -301,7 +301,7 @@ private:
     int numDrudeGroupsOnDevice = 0, numUngrouped = 0;
     bool hasDrudeGroups = false;
     OpenMM::ComputeArray drudeGroupStart, drudeGroupAtoms, drudeGroupRotates, ungroupedAtoms, drudePairStart,
-        drudePairAtoms, drudeNoiseField, drudeRelative;
+        drudePairAtoms, drudeNoiseField, drudeRelative, drudeRelativeCountArray;
     OpenMM::ComputeKernel drudeNoise, drudeHardWall, drudeRelativeEnergy, drudeScale;
     int drudeNoiseArguments, drudeNoiseRandomIndex, drudeWallArguments;
     int advanceBackupIndex, advanceKickTime, advanceProjectAfterKick, advanceDriftTime, advanceTolerance,

@@ -69,8 +69,8 @@ void CommonIntegrateMRattleDrudeNoseHooverStepKernel::initialize(const System& s
     state.initializeMixedArray(weights, w, "mrattleYoshidaSuzukiWeights");
     kernel = state.program()->createKernel("drudeNoseHooverChainsHalfStep");
     CommonRigidBodyState::Arguments arguments = state.integratorArguments(kernel);
-    arguments.add(state.numDrudeGroups());
     arguments.add(state.drudeRelativeEnergies());
+    arguments.add(state.drudeRelativeCount());
     arguments.add(length);
     for (int offset : chains)
         arguments.add(offset);

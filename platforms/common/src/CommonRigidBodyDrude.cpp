@@ -52,7 +52,9 @@ void CommonRigidBodyState::setDrudeGroups(const DrudeGroups& groups) {
     drudePairAtoms.initialize<int>(cc, std::max<size_t>(2, systemDrudePairAtoms.size()), "mrattleDrudePairAtoms");
     drudeNoiseField.initialize(cc, cc.getPaddedNumAtoms(), doubleMixed() ? sizeof(mm_double4) : sizeof(mm_float4),
                                "mrattleDrudeNoise");
-    initializeMixedArray(drudeRelative, vector<double>(std::max(1, numDrudeGroupsOnDevice), 0.0), "mrattleDrudeRelative");
+    initializeMixedArray(drudeRelative, vector<double>(cc.getNumThreadBlocks(), 0.0), "mrattleDrudeRelative");
+    drudeRelativeCountArray.initialize<int>(cc, 1, "mrattleDrudeRelativeCount");
+    drudeRelativeCountArray.upload(vector<int>(1, 0));
     mapAtoms();
     drudeNoise = stepProgram->createKernel("drudeNoise");
     drudeHardWall = stepProgram->createKernel("drudeHardWall");
@@ -102,6 +104,7 @@ void CommonRigidBodyState::setDrudeKernelArguments() {
     Arguments relative = integratorArguments(drudeRelativeEnergy);
     addDrudeGroupArguments(relative);
     relative.add(drudeRelative);
+    relative.add(drudeRelativeCountArray);
 
     Arguments scale = integratorArguments(drudeScale);
     addDrudeGroupArguments(scale);
@@ -137,7 +140,7 @@ void CommonRigidBodyState::bounceDrudes(double maxDistance, double drudeTemperat
 void CommonRigidBodyState::sumDrudeKineticEnergies() {
     sumKineticEnergy();
     if (numDrudeGroupsOnDevice > 0)
-        launch(drudeRelativeEnergy, numDrudeGroupsOnDevice);
+        launch(drudeRelativeEnergy, numDrudeGroupsOnDevice, ReductionThreads);
 }
 
 void CommonRigidBodyState::scaleDrudeVelocities() {

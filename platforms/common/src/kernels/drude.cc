@@ -143,21 +143,33 @@ KERNEL void drudeHardWall(STATE_ARGUMENTS, int numGroups, GLOBAL const int* REST
                 recordFailure(failure, stepIndex);
 }
 
-/** Twice each group's KE_C, sum m |v - R|^2, into relative[group]. */
-KERNEL void drudeRelativeEnergies(STATE_ARGUMENTS, DRUDE_GROUP_ARGUMENTS, GLOBAL mixed* RESTRICT relative) {
+/**
+ * Twice the Drude groups' KE_C, sum m |v - R|^2, summed by each work group (of REDUCTION_THREADS)
+ * into relative[GROUP_ID]; relativeCount[0] = the number of work groups.
+ */
+KERNEL void drudeRelativeEnergies(STATE_ARGUMENTS, DRUDE_GROUP_ARGUMENTS, GLOBAL mixed* RESTRICT relative,
+        GLOBAL int* RESTRICT relativeCount) {
+    LOCAL mixed sums[REDUCTION_THREADS];
+    LOCAL mixed unused[REDUCTION_THREADS];
+    mixed sum = 0;
     for (int group = GLOBAL_ID; group < numGroups; group += GLOBAL_SIZE) {
         const int start = groupStart[group], end = groupStart[group+1];
         const RigidMotion motion = groupRigidMotion(start, end, groupAtoms, groupRotates[group] != 0, posq,
                                                     posqCorrection, velm);
-        mixed sum = 0;
         for (int k = start; k < end; k++) {
             const int atom = groupAtoms[k];
             const mixed4 v = velm[atom];
             const mixed3 c = make_mixed3(v.x, v.y, v.z) - rigidVelocityAt(motion, loadPosition(posq, posqCorrection, atom));
             sum += dot(c, c)/v.w;
         }
-        relative[group] = sum;
     }
+    sums[LOCAL_ID] = sum;
+    unused[LOCAL_ID] = 0;
+    sumOverGroup(sums, unused);
+    if (LOCAL_ID == 0)
+        relative[GROUP_ID] = sums[0];
+    if (GLOBAL_ID == 0)
+        relativeCount[0] = NUM_GROUPS;
 }
 
 /** Each group's R times velocityScale[0] and C times velocityScale[1]; every other atom times velocityScale[0]. */

@@ -87,11 +87,12 @@ KERNEL void noseHooverChainHalfStep(STATE_ARGUMENTS, int chainLength, int positi
 /**
  * Half a step of MRattleDrudeNoseHooverIntegrator's two chains: the first on KE_R = KE - KE_C
  * (dof), the Drude chain on KE_C (drudeDof), twice KE from the partial sums and twice KE_C
- * from the Drude groups' relative energies (CommonRigidBodyState::sumDrudeKineticEnergies);
- * their factors into velocityScale[0] and [1] (a chain without degrees of freedom: 1). One
- * work group.
+ * from the Drude groups' relative energies' partial sums (CommonRigidBodyState::
+ * sumDrudeKineticEnergies); their factors into velocityScale[0] and [1] (a chain without
+ * degrees of freedom: 1). One work group.
  */
-KERNEL void drudeNoseHooverChainsHalfStep(STATE_ARGUMENTS, int numGroups, GLOBAL const mixed* RESTRICT relative,
+KERNEL void drudeNoseHooverChainsHalfStep(STATE_ARGUMENTS, GLOBAL const mixed* RESTRICT relative,
+        GLOBAL const int* RESTRICT relativeCount,
         int chainLength, int positionOffset, int velocityOffset, int drudePositionOffset, int drudeVelocityOffset,
         GLOBAL const mixed* RESTRICT weights, int numWeights, int numMTS, mixed dof, mixed kT, mixed frequency,
         mixed drudeDof, mixed drudeKT, mixed drudeFrequency, mixed halfStep) {
@@ -101,7 +102,8 @@ KERNEL void drudeNoseHooverChainsHalfStep(STATE_ARGUMENTS, int numGroups, GLOBAL
     const int count = partialCount[0];
     for (int g = LOCAL_ID; g < count; g += LOCAL_SIZE)
         sum += partials[2*g];
-    for (int g = LOCAL_ID; g < numGroups; g += LOCAL_SIZE)
+    const int relativeGroups = relativeCount[0];
+    for (int g = LOCAL_ID; g < relativeGroups; g += LOCAL_SIZE)
         relativeSum += relative[g];
     sums[LOCAL_ID] = sum;
     relativeSums[LOCAL_ID] = relativeSum;
