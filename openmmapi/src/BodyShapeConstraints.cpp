@@ -61,12 +61,13 @@ bool BodyShapeConstraints::apply(vector<Vec3>& positions, double storageError, v
     return straighten(positions, shapes) || constrained;
 }
 
-bool BodyShapeConstraints::applyExactly(vector<Vec3>& positions) const {
+bool BodyShapeConstraints::applyExactly(vector<Vec3>& positions, const vector<RigidBodyMath::Shape>* shapes) const {
     const bool constrained = applyConstraints(positions, 0, true);
-    return straighten(positions) || constrained;
+    return straighten(positions, nullptr, constrained ? nullptr : shapes) || constrained;
 }
 
-bool BodyShapeConstraints::straighten(vector<Vec3>& positions, vector<RigidBodyMath::Shape>* shapes) const {
+bool BodyShapeConstraints::straighten(vector<Vec3>& positions, vector<RigidBodyMath::Shape>* shapes,
+                                      const vector<RigidBodyMath::Shape>* known) const {
     const double* x = reinterpret_cast<const double*>(positions.data());
     bool changed = false;
     if (shapes != nullptr)
@@ -80,6 +81,8 @@ bool BodyShapeConstraints::straighten(vector<Vec3>& positions, vector<RigidBodyM
             const Eigen::Vector3d center = RigidBodyMath::centerOfMass(view, x);
             return std::make_pair(center, Eigen::Matrix3d(RigidBodyMath::secondMoment(view, x, center)));
         };
+        if (known != nullptr && (*known)[body] != RigidBodyMath::Shape::Linear)
+            continue;
         if (atoms.size() < 3) {  // two atoms are always on a line
             if (shapes != nullptr)
                 (*shapes)[body] = RigidBodyMath::classifyShape(moments().second, view.totalMass);

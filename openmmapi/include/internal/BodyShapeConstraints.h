@@ -44,8 +44,11 @@ public:
     /**
      * The same for every constrained body however close it is (to OpenMM's constraint
      * accuracy, 1e-10): the exact shape a device platform keeps as a body's reference.
+     * shapes, if given, are apply()'s at these positions: bodies that are not linear are not
+     * classified again unless a constraint moved them.
      */
-    bool applyExactly(std::vector<OpenMM::Vec3>& positions) const;
+    bool applyExactly(std::vector<OpenMM::Vec3>& positions,
+                      const std::vector<RigidBodyMath::Shape>* shapes = nullptr) const;
     /** The largest error of a body's shape constraints at these positions, relative to Tolerance plus the storage allowance. */
     double error(const std::vector<OpenMM::Vec3>& positions, int body, double storageError = 0) const;
     /** Relative constraint error above which a body's shape is corrected (OpenMM 7.7's SETTLE is good to ~3e-8). */
@@ -59,7 +62,8 @@ public:
 
 private:
     /** Place the atoms of each near-linear body on its axis; true if any moved. */
-    bool straighten(std::vector<OpenMM::Vec3>& positions, std::vector<RigidBodyMath::Shape>* shapes = nullptr) const;
+    bool straighten(std::vector<OpenMM::Vec3>& positions, std::vector<RigidBodyMath::Shape>* shapes = nullptr,
+                    const std::vector<RigidBodyMath::Shape>* known = nullptr) const;
     /** The constraint-geometry correction alone (of every constrained body if all). */
     bool applyConstraints(std::vector<OpenMM::Vec3>& positions, double storageError, bool all = false) const;
     const RigidBodyTopology& topology;  // the owning state's, which outlives this

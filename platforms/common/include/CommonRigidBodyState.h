@@ -223,6 +223,8 @@ private:
     }
     /** The bodies' reference geometry and identity orientations from these positions (made exact in place). */
     void setReference(std::vector<OpenMM::Vec3>& positions);
+    /** projectVelocities' check on the host, for velocities the device's screen found unusable. */
+    void projectVelocitiesOnHost(OpenMM::ContextImpl& context, double tolerance);
     std::vector<double> identityOrientations() const;
     void uploadIdentityOrientations();
     double storageError(OpenMM::ContextImpl& context, const std::vector<OpenMM::Vec3>& positions) const;
@@ -271,7 +273,7 @@ private:
     bool writingCorrectedShapes = false;
     Pass pending;
     /** Host buffers of positions and velocities set from the host, kept to reuse their memory. */
-    std::vector<OpenMM::Vec3> hostPositions, hostVelocities, hostProjected;
+    std::vector<OpenMM::Vec3> hostPositions;
     std::vector<OpenMM::mm_float4> referenceSingle;
     std::vector<OpenMM::mm_double4> referenceDouble;
     std::vector<float> identitySingle;
@@ -291,10 +293,12 @@ private:
     OpenMM::ComputeArray velocityScale;
     /** sumKineticEnergy's partial sums (2 per work group) and their count. */
     OpenMM::ComputeArray partials, partialCount;
+    /** findUnusableVelocities' verdict: 1 if a velocity is not finite. */
+    OpenMM::ComputeArray unusableVelocities;
     /** The bodies' kinetic energies (3 per body), computeKineticEnergies' program compiled at its first call. */
     OpenMM::ComputeArray bodyEnergies;
     OpenMM::ComputeKernel advanceGroups, projectBodies, constrainFreeVelocities, collideBodies, partialSums,
-        bodyKineticEnergy;
+        bodyKineticEnergy, findUnusable;
     // The Drude groups (setDrudeGroups, CommonRigidBodyDrude.cpp): System indices, group-major
     // (a group's atoms, then its Drude particles), the atoms in no group, (Drude, core) pairs group-major.
     std::vector<int> systemDrudeGroupAtoms, systemUngroupedAtoms, systemDrudePairAtoms;

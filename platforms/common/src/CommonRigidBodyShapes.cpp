@@ -69,7 +69,7 @@ void CommonRigidBodyState::updateShapes(ContextImpl& context) {
 
 void CommonRigidBodyState::setReference(vector<Vec3>& exact) {
     // In double, fully constrained bodies exactly on their constraint geometry: the shape every step rebuilds.
-    shapeConstraints->applyExactly(exact);
+    shapeConstraints->applyExactly(exact, &shapes);
     // Written in the device's element type, into buffers kept across calls.
     const bool useDouble = bodyReference.getElementSize() == sizeof(mm_double4);
     if (useDouble)

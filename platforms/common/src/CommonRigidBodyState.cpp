@@ -167,6 +167,8 @@ void CommonRigidBodyState::initialize(const System& system, const RigidBodyTopol
     initializeMixedArray(partials, vector<double>(2 * cc.getNumThreadBlocks(), 0.0), "mrattlePartialSums");
     partialCount.initialize<int>(cc, 1, "mrattlePartialCount");
     partialCount.upload(vector<int>(1, 0));
+    unusableVelocities.initialize<int>(cc, 1, "mrattleUnusableVelocities");
+    unusableVelocities.upload(vector<int>(1, 0));
     // The integrator's declared arrays (none yet: one unread number).
     initializeMixedArray(integratorArrays, {0.0}, "mrattleIntegratorArrays");
     initializeMixedArray(integratorBackup, {0.0}, "mrattleIntegratorBackup");
@@ -184,6 +186,10 @@ void CommonRigidBodyState::initialize(const System& system, const RigidBodyTopol
     projectBodies = stepProgram->createKernel("projectBodies");
     constrainFreeVelocities = stepProgram->createKernel("constrainFreeVelocities");
     partialSums = stepProgram->createKernel("kineticEnergyPartialSums");
+    findUnusable = stepProgram->createKernel("findUnusableVelocities");
+    findUnusable->addArg(cc.getNumAtoms());
+    findUnusable->addArg(cc.getVelm());
+    findUnusable->addArg(unusableVelocities);
     if (hasAndersen)
         collideBodies = stepProgram->createKernel("collideBodies");
 }
@@ -232,18 +238,33 @@ void CommonRigidBodyState::mapAtoms() {
 
 void CommonRigidBodyState::projectVelocities(ContextImpl& context, double tolerance) {
     ContextSelector selector(cc);
-    // Velocities are set from the host: checking them there costs one download per set.
-    vector<Vec3>& velocities = hostVelocities;
+    // On the device, with one 4-byte read: the given velocities kept in the step's backup
+    // (free once every step is checked), projected, then screened. Anything unusable after
+    // the projection puts the given ones back and leaves the verdict to the host's check.
+    synchronize();
+    cc.getVelm().copyTo(velmBackup);
+    projectNow(tolerance, true);
+    findUnusable->execute(cc.getNumAtoms());
+    int found;
+    unusableVelocities.download(&found);
+    if (found == 0)
+        return;
+    unusableVelocities.upload(vector<int>(1, 0));
+    velmBackup.copyTo(cc.getVelm());
+    projectVelocitiesOnHost(context, tolerance);
+}
+
+void CommonRigidBodyState::projectVelocitiesOnHost(ContextImpl& context, double tolerance) {
+    // The given velocities are on the device and in velmBackup.
+    vector<Vec3> velocities;
     context.getVelocities(velocities);
     FiniteValues::require(velocities, "velocity");
     projectNow(tolerance, true);
-    vector<Vec3>& projected = hostProjected;
-    context.getVelocities(projected);
+    context.getVelocities(velocities);
     try {
-        FiniteValues::require(projected, "velocity projected at the current positions (a degenerate constraint?)");
+        FiniteValues::require(velocities, "velocity projected at the current positions (a degenerate constraint?)");
     } catch (...) {
-        const vector<Vec3> given = velocities;  // a copy: setting them may call this again
-        context.setVelocities(given);
+        velmBackup.copyTo(cc.getVelm());
         throw;
     }
 }

@@ -103,3 +103,13 @@ KERNEL void projectBodies(BODY_ARGUMENTS, int onlyIfNotRigid, GLOBAL const int* 
         projectBody(bodyStart[body], bodyStart[body+1], bodyAtoms, bodyShape[body], posq, posqCorrection, velm,
                     onlyIfNotRigid != 0);
 }
+
+/**
+ * Whether any velocity is not finite (or beyond LARGEST_SPEED): found[0] = 1 if so (never
+ * cleared here). A screen for velocities set from the host; the host then checks them itself.
+ */
+KERNEL void findUnusableVelocities(int numAtoms, GLOBAL const mixed4* RESTRICT velm, GLOBAL int* RESTRICT found) {
+    for (int atom = GLOBAL_ID; atom < numAtoms; atom += GLOBAL_SIZE)
+        if (!isFiniteVelocity(velm[atom]))
+            found[0] = 1;
+}
