@@ -436,6 +436,30 @@ int main(int argc, char** argv) {
                         << (m > 0 ? StepSize * 1e-3 * 86400 / m : INFINITY) << "," << std::setprecision(3) << error
                         << "," << (finite ? "yes" : "no") << std::endl;
                 }
+                // Bare systems: setState of each Context's own State (positions and velocities), one
+                // call per batch, interleaved; every M-RATTLE integrator's against Verlet + SETTLE's.
+                const auto verlet = std::find(names.begin(), names.end(), "verlet_settle");
+                if (!pme && verlet != names.end()) {
+                    vector<vector<double> > seconds(runs.size());
+                    for (int r = 0; r < options.repeats; r++)
+                        for (size_t i = 0; i < runs.size(); i++) {
+                            const State state = runs[i].context->getState(State::Positions | State::Velocities);
+                            Clock::time_point start = Clock::now();
+                            runs[i].context->setState(state);
+                            runs[i].context->getState(State::Positions);
+                            seconds[i].push_back(std::max(1e-9, secondsSince(start) - sync[i]));
+                        }
+                    const vector<double>& b = seconds[verlet - names.begin()];
+                    for (size_t i = 0; i < runs.size(); i++)
+                        if (runs[i].name.rfind("mrattle", 0) == 0) {
+                            const PairedRatio paired = pairedRatio(seconds[i], b, false);
+                            const double value = median(seconds[i]) / median(b);
+                            ratios << systemName << "," << atoms << "," << runs[i].name << " setState ("
+                                   << std::setprecision(3) << 1e3 * median(seconds[i]) << " ms) over verlet_settle ("
+                                   << 1e3 * median(b) << " ms)," << value << ",<= 2," << (value <= 2 ? "yes" : "no")
+                                   << "," << paired.ratio << "," << paired.low << "," << paired.high << std::endl;
+                        }
+                }
                 // The targets: integration (bare) at most the pair's target times the other's
                 // time; ns/day with PME at least 0.95x the other's (time ratio at most 1/0.95).
                 for (const Compared& compared : Comparisons) {

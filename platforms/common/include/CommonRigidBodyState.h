@@ -171,6 +171,12 @@ public:
     /** Steps between lazy copies of the failure flag to the host. */
     static constexpr int FlagCopyInterval = 16;
     /**
+     * Bodies of more atoms than this (not linear) are moved by a work group of LargeBodyThreads
+     * each (kernels/largeBodies.cc), their sums reduced in local memory; smaller ones by one work item.
+     */
+    static constexpr int LargeBodyAtoms = 64;
+    static constexpr int LargeBodyThreads = 64;
+    /**
      * Host memory for the flag's asynchronous copy, the plugin's own (OpenMM overwrites its
      * pinned buffer). Plain memory unless a platform sets its own: CUDA copies asynchronously
      * only into page-locked memory. Each platform's plugin links its own copy of this class.
@@ -297,6 +303,10 @@ private:
     OpenMM::ComputeArray unusableVelocities;
     /** The bodies' kinetic energies (3 per body), computeKineticEnergies' program compiled at its first call. */
     OpenMM::ComputeArray bodyEnergies;
+    /** The bodies of more than LargeBodyAtoms atoms (body indices), and their count. */
+    OpenMM::ComputeArray largeBodies;
+    int numLargeBodies = 0;
+    OpenMM::ComputeKernel advanceLargeBodies, projectLargeBodies;
     OpenMM::ComputeKernel advanceGroups, projectBodies, constrainFreeVelocities, collideBodies, partialSums,
         bodyKineticEnergy, findUnusable;
     // The Drude groups (setDrudeGroups, CommonRigidBodyDrude.cpp): System indices, group-major

@@ -108,12 +108,18 @@ void CommonRigidBodyState::initialize(const System& system, const RigidBodyTopol
     inverseMasses.resize(system.getNumParticles());
     for (int i = 0; i < system.getNumParticles(); i++)
         inverseMasses[i] = (system.getParticleMass(i) == 0 ? 0.0 : 1.0 / system.getParticleMass(i));
-    vector<int> starts = {0};
+    vector<int> starts = {0}, large;
     for (int b = 0; b < numBodies; b++) {
         for (int atom : bodies.getBodyParticles(b))
             systemBodyAtoms.push_back(atom);
         starts.push_back(systemBodyAtoms.size());
+        if (bodies.getBodyParticles(b).size() > LargeBodyAtoms)
+            large.push_back(b);
     }
+    numLargeBodies = large.size();
+    large.resize(std::max<size_t>(1, large.size()), 0);
+    largeBodies.initialize<int>(cc, large.size(), "mrattleLargeBodies");
+    largeBodies.upload(large);
     vector<double> distances;
     vector<int> clusterStarts = {0}, clusterAtomStarts = {0};
     vector<bool> grouped(system.getNumParticles(), false);
@@ -184,6 +190,8 @@ void CommonRigidBodyState::initialize(const System& system, const RigidBodyTopol
                                     programDefines(cc.getUseDoublePrecision(), cc.getUseMixedPrecision()));
     advanceGroups = stepProgram->createKernel("advanceGroups");
     projectBodies = stepProgram->createKernel("projectBodies");
+    advanceLargeBodies = stepProgram->createKernel("advanceLargeBodies");
+    projectLargeBodies = stepProgram->createKernel("projectLargeBodies");
     constrainFreeVelocities = stepProgram->createKernel("constrainFreeVelocities");
     partialSums = stepProgram->createKernel("kineticEnergyPartialSums");
     findUnusable = stepProgram->createKernel("findUnusableVelocities");

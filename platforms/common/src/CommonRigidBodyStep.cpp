@@ -61,6 +61,8 @@ std::map<std::string, std::string> CommonRigidBodyState::programDefines(bool use
     defines["STALE_REFERENCE"] = mixedConstant(StaleReference);
     defines["LARGEST_SPEED"] = mixedConstant(LargestSpeed);
     defines["REDUCTION_THREADS"] = std::to_string(ReductionThreads);
+    defines["LARGE_BODY_ATOMS"] = std::to_string(LargeBodyAtoms);
+    defines["LARGE_BODY_THREADS"] = std::to_string(LargeBodyThreads);
     defines["SHAPE_GENERAL"] = std::to_string(shapeCode(RigidBodyMath::Shape::General));
     defines["SHAPE_LINEAR"] = std::to_string(shapeCode(RigidBodyMath::Shape::Linear));
     defines["SHAPE_POINT"] = std::to_string(shapeCode(RigidBodyMath::Shape::Point));
@@ -70,7 +72,8 @@ std::map<std::string, std::string> CommonRigidBodyState::programDefines(bool use
 std::string CommonRigidBodyState::programSource(const std::string& sources) {
     return CommonMRattleKernelSources::bodyMath + CommonMRattleKernelSources::rotation + CommonMRattleKernelSources::step +
            CommonMRattleKernelSources::freeConstraints + CommonMRattleKernelSources::projection +
-           CommonMRattleKernelSources::advance + CommonMRattleKernelSources::reduction + sources;
+           CommonMRattleKernelSources::advance + CommonMRattleKernelSources::largeBodies +
+           CommonMRattleKernelSources::reduction + sources;
 }
 
 CommonRigidBodyState::Arguments CommonRigidBodyState::arguments(ComputeKernel& kernel) {
@@ -122,41 +125,54 @@ void CommonRigidBodyState::setKernelArguments() {
     // OpenMM's device random numbers where something made them; else any float4-sized array, unread.
     ArrayInterface& random = hasRandomNumbers ? integration.getRandom() : static_cast<ArrayInterface&>(velmBackup);
 
-    Arguments advance = arguments(advanceGroups);
-    addBodyArguments(advance);
-    advance.add(numClusters);
-    advance.add(numFree);
-    advance.add(bodyReference);
-    advance.add(bodyOrientation);
-    advance.add(clusterStart);
-    advance.add(constraintAtoms);
-    advance.add(constraintDistance);
-    advance.add(clusterAtomStart);
-    advance.add(clusterAtoms);
-    advance.add(freeAtoms);
-    advance.add(cc.getLongForceBuffer());
-    advance.add(cc.getPaddedNumAtoms());
-    advance.add(integration.getPosDelta());
-    advanceBackupIndex = addBackupArrays(advance);
-    advanceKickTime = advance.addMixed(0.0);
-    advanceProjectAfterKick = advance.add(0);
-    advanceDriftTime = advance.addMixed(0.0);
-    advanceTolerance = advance.addMixed(0.0);
-    advanceNoiseDecay = advance.addMixed(1.0);
-    advanceNoiseScale = advance.addMixed(0.0);
-    advance.add(random);
-    advanceRandomIndex = advance.add(0u);
-    advanceProjectAtEnd = advance.add(0);
-    advanceResetFollows = advance.add(0);
-    advance.add(failure);
-    advanceStepIndex = advance.add(0);
-    advance.add(velocityScale);
-    advanceScaleVelocities = advance.add(0);
+    // advanceLargeBodies takes advanceGroups' arguments, then its list of bodies.
+    for (ComputeKernel* kernel : {&advanceGroups, &advanceLargeBodies}) {
+        Arguments advance = arguments(*kernel);
+        addBodyArguments(advance);
+        advance.add(numClusters);
+        advance.add(numFree);
+        advance.add(bodyReference);
+        advance.add(bodyOrientation);
+        advance.add(clusterStart);
+        advance.add(constraintAtoms);
+        advance.add(constraintDistance);
+        advance.add(clusterAtomStart);
+        advance.add(clusterAtoms);
+        advance.add(freeAtoms);
+        advance.add(cc.getLongForceBuffer());
+        advance.add(cc.getPaddedNumAtoms());
+        advance.add(integration.getPosDelta());
+        advanceBackupIndex = addBackupArrays(advance);
+        advanceKickTime = advance.addMixed(0.0);
+        advanceProjectAfterKick = advance.add(0);
+        advanceDriftTime = advance.addMixed(0.0);
+        advanceTolerance = advance.addMixed(0.0);
+        advanceNoiseDecay = advance.addMixed(1.0);
+        advanceNoiseScale = advance.addMixed(0.0);
+        advance.add(random);
+        advanceRandomIndex = advance.add(0u);
+        advanceProjectAtEnd = advance.add(0);
+        advanceResetFollows = advance.add(0);
+        advance.add(failure);
+        advanceStepIndex = advance.add(0);
+        advance.add(velocityScale);
+        advanceScaleVelocities = advance.add(0);
+        if (kernel == &advanceLargeBodies) {
+            advance.add(largeBodies);
+            advance.add(numLargeBodies);
+        }
+    }
 
-    Arguments projection = arguments(projectBodies);
-    addBodyArguments(projection);
-    projectOnlyIfNotRigid = projection.add(0);
-    projection.add(failure);
+    for (ComputeKernel* kernel : {&projectBodies, &projectLargeBodies}) {
+        Arguments projection = arguments(*kernel);
+        addBodyArguments(projection);
+        projectOnlyIfNotRigid = projection.add(0);
+        projection.add(failure);
+        if (kernel == &projectLargeBodies) {
+            projection.add(largeBodies);
+            projection.add(numLargeBodies);
+        }
+    }
 
     Arguments freeVelocities = arguments(constrainFreeVelocities);
     freeVelocities.add(numClusters);
@@ -303,23 +319,28 @@ void CommonRigidBodyState::requireBackup() {
 }
 
 void CommonRigidBodyState::launchPass(const Pass& pass) {
-    advanceGroups->setArg(advanceBackupIndex, backupStepIndex);
-    setMixedArg(advanceGroups, advanceKickTime, pass.kickTime);
-    advanceGroups->setArg(advanceProjectAfterKick, pass.projectAfterKick ? 1 : 0);
-    setMixedArg(advanceGroups, advanceDriftTime, pass.driftTime);
-    setMixedArg(advanceGroups, advanceTolerance, tolerance);
-    setMixedArg(advanceGroups, advanceNoiseDecay, pass.noiseDecay);
-    setMixedArg(advanceGroups, advanceNoiseScale, pass.noiseScale);
-    if (pass.noiseScale != 0)
-        advanceGroups->setArg(advanceRandomIndex,
-                              (unsigned int) cc.getIntegrationUtilities().prepareRandomNumbers(cc.getPaddedNumAtoms()));
-    advanceGroups->setArg(advanceProjectAtEnd, pass.projectAtEnd ? 1 : 0);
-    advanceGroups->setArg(advanceResetFollows, pass.resetFollows ? 1 : 0);
-    advanceGroups->setArg(advanceStepIndex, failureStepIndex());
-    advanceGroups->setArg(advanceScaleVelocities, pass.scaleVelocities ? 1 : 0);
+    const unsigned int randomIndex =
+        pass.noiseScale != 0 ? cc.getIntegrationUtilities().prepareRandomNumbers(cc.getPaddedNumAtoms()) : 0;
+    for (ComputeKernel* kernel : {&advanceGroups, &advanceLargeBodies}) {
+        (*kernel)->setArg(advanceBackupIndex, backupStepIndex);
+        setMixedArg(*kernel, advanceKickTime, pass.kickTime);
+        (*kernel)->setArg(advanceProjectAfterKick, pass.projectAfterKick ? 1 : 0);
+        setMixedArg(*kernel, advanceDriftTime, pass.driftTime);
+        setMixedArg(*kernel, advanceTolerance, tolerance);
+        setMixedArg(*kernel, advanceNoiseDecay, pass.noiseDecay);
+        setMixedArg(*kernel, advanceNoiseScale, pass.noiseScale);
+        if (pass.noiseScale != 0)
+            (*kernel)->setArg(advanceRandomIndex, randomIndex);
+        (*kernel)->setArg(advanceProjectAtEnd, pass.projectAtEnd ? 1 : 0);
+        (*kernel)->setArg(advanceResetFollows, pass.resetFollows ? 1 : 0);
+        (*kernel)->setArg(advanceStepIndex, failureStepIndex());
+        (*kernel)->setArg(advanceScaleVelocities, pass.scaleVelocities ? 1 : 0);
+    }
     const int numGroups = numBodies + numClusters + numFree;
     if (numGroups > 0)
         advanceGroups->execute(numGroups);
+    if (numLargeBodies > 0)  // after advanceGroups: they read the flag it may have set
+        advanceLargeBodies->execute(numLargeBodies * LargeBodyThreads, LargeBodyThreads);
     backupStepIndex = -1;  // once per step
 }
 
@@ -348,6 +369,10 @@ void CommonRigidBodyState::projectNow(double tolerance, bool onlyIfNotRigid) {
     if (numBodies > 0) {
         projectBodies->setArg(projectOnlyIfNotRigid, onlyIfNotRigid ? 1 : 0);
         projectBodies->execute(numBodies);
+        if (numLargeBodies > 0) {
+            projectLargeBodies->setArg(projectOnlyIfNotRigid, onlyIfNotRigid ? 1 : 0);
+            projectLargeBodies->execute(numLargeBodies * LargeBodyThreads, LargeBodyThreads);
+        }
     }
     if (numClusters > 0) {
         setMixedArg(constrainFreeVelocities, freeVelocitiesTolerance, tolerance);

@@ -5,7 +5,8 @@
  * projection, drift and reset (M-RATTLE for a body, SHAKE for a cluster), Langevin noise and
  * projection, projection. A group touches only its own atoms, so no phase waits for another.
  * A body is not projected right before a reset (this pass's, or the next one's when
- * resetFollows): the reset reads only its momenta, which the projection keeps.
+ * resetFollows): the reset reads only its momenta, which the projection keeps. Large bodies
+ * (isLargeBody) are advanceLargeBodies', launched after this in the same pass.
  */
 
 /** Group kinds. */
@@ -25,14 +26,14 @@ INLINE_DEVICE bool projectCluster(int kind, int index, GLOBAL const int* RESTRIC
 
 /**
  * The backup (if asked for), the scaling (if velocityFactor != 1) and the kick (if kickScale
- * != 0) of a group's atoms; false if a kicked velocity is not finite.
+ * != 0) of a group's atoms first, first + stride, ... < end; false if a kicked velocity is not finite.
  */
-INLINE_DEVICE bool backupAndKick(int start, int end, GLOBAL const int* RESTRICT atoms, bool backup,
+INLINE_DEVICE bool backupAndKick(int first, int end, int stride, GLOBAL const int* RESTRICT atoms, bool backup,
         GLOBAL real4* RESTRICT posq, GLOBAL real4* RESTRICT posqCorrection, GLOBAL mixed4* RESTRICT velm,
         GLOBAL real4* RESTRICT posqBackup, GLOBAL real4* RESTRICT correctionBackup, GLOBAL mixed4* RESTRICT velmBackup,
         mixed velocityFactor, mixed kickScale, GLOBAL const mm_long* RESTRICT force, int paddedNumAtoms) {
     bool ok = true;
-    for (int k = start; k < end; k++) {
+    for (int k = first; k < end; k += stride) {
         const int atom = atoms[k];
         if (backup)
             backupAtom(atom, posq, posqCorrection, velm, posqBackup, correctionBackup, velmBackup);
@@ -46,10 +47,10 @@ INLINE_DEVICE bool backupAndKick(int start, int end, GLOBAL const int* RESTRICT 
     return ok;
 }
 
-/** Langevin's friction and noise for a group's atoms. */
-INLINE_DEVICE void noiseGroup(int start, int end, GLOBAL const int* RESTRICT atoms, mixed noiseDecay, mixed noiseScale,
-        GLOBAL const float4* RESTRICT random, unsigned int randomIndex, GLOBAL mixed4* RESTRICT velm) {
-    for (int k = start; k < end; k++)
+/** Langevin's friction and noise for a group's atoms first, first + stride, ... < end. */
+INLINE_DEVICE void noiseGroup(int first, int end, int stride, GLOBAL const int* RESTRICT atoms, mixed noiseDecay,
+        mixed noiseScale, GLOBAL const float4* RESTRICT random, unsigned int randomIndex, GLOBAL mixed4* RESTRICT velm) {
+    for (int k = first; k < end; k += stride)
         noiseAtom(atoms[k], noiseDecay, noiseScale, random, randomIndex, velm);
 }
 
@@ -61,7 +62,7 @@ INLINE_DEVICE bool advanceBody(int body, int start, int end, GLOBAL const int* R
         GLOBAL mixed4* RESTRICT velmBackup, mixed velocityFactor, mixed kickScale, bool projectAfterKick,
         mixed driftTime, mixed noiseDecay, mixed noiseScale, GLOBAL const float4* RESTRICT random,
         unsigned int randomIndex, bool projectAtEnd, bool resetFollows) {
-    bool ok = backupAndKick(start, end, bodyAtoms, backup, posq, posqCorrection, velm, posqBackup, correctionBackup,
+    bool ok = backupAndKick(start, end, 1, bodyAtoms, backup, posq, posqCorrection, velm, posqBackup, correctionBackup,
                             velmBackup, velocityFactor, kickScale, force, paddedNumAtoms);
     if (driftTime != 0)  // no projection before the reset: see above
         ok = resetBody(body, start, end, bodyAtoms, reference, orientation, shape, driftTime, posq, posqCorrection,
@@ -69,7 +70,7 @@ INLINE_DEVICE bool advanceBody(int body, int start, int end, GLOBAL const int* R
     else if (projectAfterKick)
         projectBody(start, end, bodyAtoms, shape, posq, posqCorrection, velm, false);
     if (noiseDecay != 1) {
-        noiseGroup(start, end, bodyAtoms, noiseDecay, noiseScale, random, randomIndex, velm);
+        noiseGroup(start, end, 1, bodyAtoms, noiseDecay, noiseScale, random, randomIndex, velm);
         if (!resetFollows)
             projectBody(start, end, bodyAtoms, shape, posq, posqCorrection, velm, false);
     }
@@ -78,15 +79,18 @@ INLINE_DEVICE bool advanceBody(int body, int start, int end, GLOBAL const int* R
     return ok;
 }
 
-KERNEL void advanceGroups(BODY_ARGUMENTS, int numClusters, int numFree, GLOBAL mixed4* RESTRICT bodyReference,
-        GLOBAL mixed* RESTRICT bodyOrientation, GLOBAL const int* RESTRICT clusterStart,
-        GLOBAL const int2* RESTRICT constraintAtoms, GLOBAL const mixed* RESTRICT constraintDistance,
-        GLOBAL const int* RESTRICT clusterAtomStart, GLOBAL const int* RESTRICT clusterAtoms,
-        GLOBAL const int* RESTRICT freeAtoms, GLOBAL const mm_long* RESTRICT force, int paddedNumAtoms,
-        GLOBAL mixed4* RESTRICT posDelta, BACKUP_ARGUMENTS, mixed kickTime, int projectAfterKick, mixed driftTime,
-        mixed tolerance, mixed noiseDecay, mixed noiseScale, GLOBAL const float4* RESTRICT random,
-        unsigned int randomIndex, int projectAtEnd, int resetFollows, GLOBAL int* RESTRICT failure, int stepIndex,
-        GLOBAL const mixed* RESTRICT velocityScale, int scaleVelocities) {
+/** A pass's arguments (CommonRigidBodyState::setKernelArguments), advanceGroups' and advanceLargeBodies'. */
+#define ADVANCE_ARGUMENTS BODY_ARGUMENTS, int numClusters, int numFree, GLOBAL mixed4* RESTRICT bodyReference, \
+        GLOBAL mixed* RESTRICT bodyOrientation, GLOBAL const int* RESTRICT clusterStart, \
+        GLOBAL const int2* RESTRICT constraintAtoms, GLOBAL const mixed* RESTRICT constraintDistance, \
+        GLOBAL const int* RESTRICT clusterAtomStart, GLOBAL const int* RESTRICT clusterAtoms, \
+        GLOBAL const int* RESTRICT freeAtoms, GLOBAL const mm_long* RESTRICT force, int paddedNumAtoms, \
+        GLOBAL mixed4* RESTRICT posDelta, BACKUP_ARGUMENTS, mixed kickTime, int projectAfterKick, mixed driftTime, \
+        mixed tolerance, mixed noiseDecay, mixed noiseScale, GLOBAL const float4* RESTRICT random, \
+        unsigned int randomIndex, int projectAtEnd, int resetFollows, GLOBAL int* RESTRICT failure, int stepIndex, \
+        GLOBAL const mixed* RESTRICT velocityScale, int scaleVelocities
+
+KERNEL void advanceGroups(ADVANCE_ARGUMENTS) {
     const int failed = failure[0];
     if (skipAfterFailure(failed, backupStepIndex))
         return;
@@ -120,8 +124,10 @@ KERNEL void advanceGroups(BODY_ARGUMENTS, int numClusters, int numFree, GLOBAL m
             end = index + 1;
             atoms = freeAtoms;
         }
+        if (kind == GROUP_BODY && isLargeBody(start, end, bodyShape[index]))
+            continue;  // advanceLargeBodies'
         if (onlyBackup) {
-            backupAndKick(start, end, atoms, true, posq, posqCorrection, velm, posqBackup, correctionBackup, velmBackup,
+            backupAndKick(start, end, 1, atoms, true, posq, posqCorrection, velm, posqBackup, correctionBackup, velmBackup,
                           1, 0, force, paddedNumAtoms);
             continue;
         }
@@ -132,7 +138,7 @@ KERNEL void advanceGroups(BODY_ARGUMENTS, int numClusters, int numFree, GLOBAL m
                              correctionBackup, velmBackup, velocityFactor, kickScale, projectAfterKick != 0, driftTime,
                              noiseDecay, noiseScale, random, randomIndex, projectAtEnd != 0, resetFollows != 0);
         else {
-            ok = backupAndKick(start, end, atoms, backupStepIndex >= 0, posq, posqCorrection, velm, posqBackup,
+            ok = backupAndKick(start, end, 1, atoms, backupStepIndex >= 0, posq, posqCorrection, velm, posqBackup,
                                correctionBackup, velmBackup, velocityFactor, kickScale, force, paddedNumAtoms);
             if (projectAfterKick)
                 ok = projectCluster(kind, index, clusterStart, constraintAtoms, tolerance, posq, posqCorrection, velm) && ok;
@@ -144,7 +150,7 @@ KERNEL void advanceGroups(BODY_ARGUMENTS, int numClusters, int numFree, GLOBAL m
                     driftAtom(atoms[start], driftTime, posq, posqCorrection, velm);
             }
             if (noiseDecay != 1) {
-                noiseGroup(start, end, atoms, noiseDecay, noiseScale, random, randomIndex, velm);
+                noiseGroup(start, end, 1, atoms, noiseDecay, noiseScale, random, randomIndex, velm);
                 ok = projectCluster(kind, index, clusterStart, constraintAtoms, tolerance, posq, posqCorrection, velm) && ok;
             }
             if (projectAtEnd)

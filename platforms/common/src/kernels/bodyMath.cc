@@ -151,6 +151,14 @@ INLINE_DEVICE mixed4 kicked(mixed4 velocity, mixed scale, GLOBAL const mm_long* 
     return velocity;
 }
 
+/**
+ * Whether a body is moved by a work group of its own (largeBodies.cc) rather than by one work
+ * item: more than LARGE_BODY_ATOMS atoms, and not linear (a linear body's rotation reads every atom).
+ */
+INLINE_DEVICE bool isLargeBody(int start, int end, int shape) {
+    return end - start > LARGE_BODY_ATOMS && shape != SHAPE_LINEAR;
+}
+
 /** A body's motion as one loop over its atoms gathers it (gatherBody). */
 typedef struct {
     mixed3 origin;  // the body's first atom: positions are taken relative to it, so no digits are lost far from the origin
@@ -161,50 +169,80 @@ typedef struct {
     mixed shapeError;  // with a reference: the largest |(x_k - x_0) - Q (ref_k - ref_0)|^2
 } BodySums;
 
+/** What a share of a body's atoms adds to BodySums (its sums about the body's first atom). */
+typedef struct {
+    mixed mass;
+    mixed3 moment, momentum, angular;
+    Matrix3 J;
+    mixed shapeError;
+} BodyAtomSums;
+
 /**
- * One loop over a body's atoms (velocities' .w the inverse mass): its centre, mean velocity,
- * second moment and angular momentum, summed about its first atom and moved to the centre
- * (J_c = J_0 - M c c^T, L_c = L_0 - M c x V), so the reset and the projection read the atoms
- * once before they write them. With checkShape, also how far the body's shape, seen from
- * its first atom, is from its reference geometry turned by Q.
+ * The sums over a body's atoms first, first + stride, ... < end (velocities' .w the inverse
+ * mass) about origin; with checkShape, also how far the body's shape, seen from origin, is
+ * from its reference geometry turned by Q.
+ */
+INLINE_DEVICE BodyAtomSums sumBodyAtoms(int first, int end, int stride, mixed3 origin, GLOBAL const int* RESTRICT bodyAtoms,
+        GLOBAL const real4* RESTRICT posq, GLOBAL const real4* RESTRICT posqCorrection,
+        GLOBAL const mixed4* RESTRICT velm, bool checkShape, GLOBAL const mixed4* RESTRICT reference, mixed3 ref0,
+        Matrix3 Q) {
+    BodyAtomSums s;
+    s.mass = 0;
+    s.moment = s.momentum = s.angular = make_mixed3(0, 0, 0);
+    s.J = zeroMatrix();
+    s.shapeError = 0;
+    for (int k = first; k < end; k += stride) {
+        const int atom = bodyAtoms[k];
+        const mixed4 v = velm[atom];
+        const mixed m = 1/v.w;  // body members are massive
+        const mixed3 a = loadPosition(posq, posqCorrection, atom) - origin;
+        const mixed3 velocity = make_mixed3(v.x, v.y, v.z);
+        s.mass += m;
+        s.moment += m*a;
+        s.momentum += m*velocity;
+        s.angular += m*cross(a, velocity);
+        addOuter(&s.J, m, a);
+        if (checkShape) {
+            const mixed4 q = reference[k];
+            const mixed3 d = a - apply(Q, make_mixed3(q.x, q.y, q.z) - ref0);
+            s.shapeError = max(s.shapeError, dot(d, d));
+        }
+    }
+    return s;
+}
+
+/** A body's sums about its first atom moved to its centre: J_c = J_0 - M c c^T, L_c = L_0 - M c x V. */
+INLINE_DEVICE BodySums bodySumsAbout(BodyAtomSums s, mixed3 origin) {
+    BodySums sums;
+    sums.origin = origin;
+    const mixed inverseMass = 1/s.mass;
+    sums.center = s.moment*inverseMass;
+    sums.V = s.momentum*inverseMass;
+    addOuter(&s.J, -s.mass, sums.center);
+    sums.J = s.J;
+    sums.L = s.angular - s.mass*cross(sums.center, sums.V);
+    sums.shapeError = s.shapeError;
+    return sums;
+}
+
+/** The reference geometry's first atom, from which bodyAtoms' shape is compared (checkShape). */
+INLINE_DEVICE mixed3 firstReference(int start, bool checkShape, GLOBAL const mixed4* RESTRICT reference) {
+    if (!checkShape)
+        return make_mixed3(0, 0, 0);
+    const mixed4 q = reference[start];
+    return make_mixed3(q.x, q.y, q.z);
+}
+
+/**
+ * One loop over a body's atoms: its centre, mean velocity, second moment and angular momentum
+ * (sumBodyAtoms, bodySumsAbout), so the reset and the projection read the atoms once before
+ * they write them.
  */
 INLINE_DEVICE BodySums gatherBody(int start, int end, GLOBAL const int* RESTRICT bodyAtoms,
         GLOBAL const real4* RESTRICT posq, GLOBAL const real4* RESTRICT posqCorrection,
         GLOBAL const mixed4* RESTRICT velm, bool checkShape, GLOBAL const mixed4* RESTRICT reference, Matrix3 Q) {
-    BodySums sums;
-    sums.origin = loadPosition(posq, posqCorrection, bodyAtoms[start]);
-    mixed mass = 0;
-    mixed3 moment = make_mixed3(0, 0, 0), momentum = make_mixed3(0, 0, 0), angular = make_mixed3(0, 0, 0);
-    Matrix3 J = zeroMatrix();
-    mixed3 ref0 = make_mixed3(0, 0, 0);
-    if (checkShape) {
-        const mixed4 q = reference[start];
-        ref0 = make_mixed3(q.x, q.y, q.z);
-    }
-    sums.shapeError = 0;
-    for (int k = start; k < end; k++) {
-        const int atom = bodyAtoms[k];
-        const mixed4 v = velm[atom];
-        const mixed m = 1/v.w;  // body members are massive
-        const mixed3 a = loadPosition(posq, posqCorrection, atom) - sums.origin;
-        const mixed3 velocity = make_mixed3(v.x, v.y, v.z);
-        mass += m;
-        moment += m*a;
-        momentum += m*velocity;
-        angular += m*cross(a, velocity);
-        addOuter(&J, m, a);
-        if (checkShape) {
-            const mixed4 q = reference[k];
-            const mixed3 d = a - apply(Q, make_mixed3(q.x, q.y, q.z) - ref0);
-            sums.shapeError = max(sums.shapeError, dot(d, d));
-        }
-    }
-    const mixed inverseMass = 1/mass;
-    sums.center = moment*inverseMass;
-    sums.V = momentum*inverseMass;
-    addOuter(&J, -mass, sums.center);
-    sums.J = J;
-    sums.L = angular - mass*cross(sums.center, sums.V);
-    return sums;
+    const mixed3 origin = loadPosition(posq, posqCorrection, bodyAtoms[start]);
+    const BodyAtomSums s = sumBodyAtoms(start, end, 1, origin, bodyAtoms, posq, posqCorrection, velm, checkShape,
+                                        reference, firstReference(start, checkShape, reference), Q);
+    return bodySumsAbout(s, origin);
 }
-

@@ -13,7 +13,7 @@ KERNEL void collideBodies(BODY_ARGUMENTS, mixed kT, GLOBAL const float4* RESTRIC
         const int start = bodyStart[body], end = bodyStart[body+1];
         mixed residual, scale;
         const RigidMotion motion = rigidMotion(start, end, bodyAtoms, bodyShape[body], posq, posqCorrection, velm);
-        rigidResidual(motion, start, end, bodyAtoms, posq, posqCorrection, velm, &residual, &scale);
+        rigidResidual(motion, start, end, 1, bodyAtoms, posq, posqCorrection, velm, &residual, &scale);
         if (!(residual > COLLISION_THRESHOLD*COLLISION_THRESHOLD*scale || (scale == 0 && residual > 0)))
             continue;  // still rigid: no atom of it collided
         for (int k = start; k < end; k++) {

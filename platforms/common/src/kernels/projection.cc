@@ -51,13 +51,16 @@ INLINE_DEVICE RigidMotion rigidMotion(int start, int end, GLOBAL const int* REST
     return rigidMotionOf(sums, start, end, bodyAtoms, shape, posq, posqCorrection);
 }
 
-/** How far a body's velocities are from their rigid motion: *residual is the largest |v_i - rigid_i|^2, *scale the largest |rigid_i|^2. */
-INLINE_DEVICE void rigidResidual(RigidMotion motion, int start, int end, GLOBAL const int* RESTRICT bodyAtoms,
+/**
+ * How far a body's velocities (of atoms first, first + stride, ... < end) are from their rigid
+ * motion: *residual is the largest |v_i - rigid_i|^2, *scale the largest |rigid_i|^2.
+ */
+INLINE_DEVICE void rigidResidual(RigidMotion motion, int first, int end, int stride, GLOBAL const int* RESTRICT bodyAtoms,
         GLOBAL const real4* RESTRICT posq, GLOBAL const real4* RESTRICT posqCorrection,
         GLOBAL const mixed4* RESTRICT velm, mixed* residual, mixed* scale) {
     *scale = 0;
     *residual = 0;
-    for (int k = start; k < end; k++) {
+    for (int k = first; k < end; k += stride) {
         const int atom = bodyAtoms[k];
         const mixed4 v = velm[atom];
         const mixed3 rigid = motion.V + cross(motion.omega, loadPosition(posq, posqCorrection, atom) - motion.origin - motion.center);
@@ -67,10 +70,10 @@ INLINE_DEVICE void rigidResidual(RigidMotion motion, int start, int end, GLOBAL 
     }
 }
 
-/** Replace a body's velocities by its rigid motion. */
-INLINE_DEVICE void setRigidVelocities(RigidMotion motion, int start, int end, GLOBAL const int* RESTRICT bodyAtoms,
+/** Replace a body's velocities (of atoms first, first + stride, ... < end) by its rigid motion. */
+INLINE_DEVICE void setRigidVelocities(RigidMotion motion, int first, int end, int stride, GLOBAL const int* RESTRICT bodyAtoms,
         GLOBAL const real4* RESTRICT posq, GLOBAL const real4* RESTRICT posqCorrection, GLOBAL mixed4* RESTRICT velm) {
-    for (int k = start; k < end; k++) {
+    for (int k = first; k < end; k += stride) {
         const int atom = bodyAtoms[k];
         const mixed4 v = velm[atom];
         const mixed3 rigid = motion.V + cross(motion.omega, loadPosition(posq, posqCorrection, atom) - motion.origin - motion.center);
@@ -88,19 +91,20 @@ INLINE_DEVICE void projectBody(int start, int end, GLOBAL const int* RESTRICT bo
     const RigidMotion motion = rigidMotion(start, end, bodyAtoms, shape, posq, posqCorrection, velm);
     if (onlyIfNotRigid) {
         mixed residual, scale;
-        rigidResidual(motion, start, end, bodyAtoms, posq, posqCorrection, velm, &residual, &scale);
+        rigidResidual(motion, start, end, 1, bodyAtoms, posq, posqCorrection, velm, &residual, &scale);
         if (residual <= RIGID_TOLERANCE*RIGID_TOLERANCE*scale)
             return;
     }
-    setRigidVelocities(motion, start, end, bodyAtoms, posq, posqCorrection, velm);
+    setRigidVelocities(motion, start, end, 1, bodyAtoms, posq, posqCorrection, velm);
 }
 
-/** Every body's projection (velocities set from the host, Andersen collisions). */
+/** Every body's projection (velocities set from the host, Andersen collisions); large ones: projectLargeBodies. */
 KERNEL void projectBodies(BODY_ARGUMENTS, int onlyIfNotRigid, GLOBAL const int* RESTRICT failure) {
     if (failure[0] != 0)
         return;
     for (int body = GLOBAL_ID; body < numBodies; body += GLOBAL_SIZE)
-        projectBody(bodyStart[body], bodyStart[body+1], bodyAtoms, bodyShape[body], posq, posqCorrection, velm,
+        if (!isLargeBody(bodyStart[body], bodyStart[body+1], bodyShape[body]))
+            projectBody(bodyStart[body], bodyStart[body+1], bodyAtoms, bodyShape[body], posq, posqCorrection, velm,
                     onlyIfNotRigid != 0);
 }
 

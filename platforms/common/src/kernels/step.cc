@@ -104,13 +104,15 @@ INLINE_DEVICE void storeOrientation(GLOBAL mixed* RESTRICT orientation, int body
  * reference geometry (reference[k] for bodyAtoms[k], about its centre of mass) turned by Q
  * is then the body's shape, exact to round-off however many steps it takes. If the body's
  * shape is not Q ref (stale: something else moved it, e.g. another integrator of a
- * CompoundIntegrator), its positions a about its centre become its reference, Q = 1.
+ * CompoundIntegrator), its positions a about its centre become its reference, Q = 1. The
+ * atoms first, first + stride, ... < end are this work item's; the leader stores Q.
  */
-INLINE_DEVICE Matrix3 turnOrientation(int body, int start, int end, GLOBAL const int* RESTRICT bodyAtoms,
-        GLOBAL mixed4* RESTRICT reference, GLOBAL mixed* RESTRICT orientation, GLOBAL const real4* RESTRICT posq,
-        GLOBAL const real4* RESTRICT posqCorrection, Matrix3 Q, bool stale, mixed3 origin, mixed3 center, Matrix3 delta) {
+INLINE_DEVICE Matrix3 turnOrientation(int body, int first, int end, int stride, bool leader,
+        GLOBAL const int* RESTRICT bodyAtoms, GLOBAL mixed4* RESTRICT reference, GLOBAL mixed* RESTRICT orientation,
+        GLOBAL const real4* RESTRICT posq, GLOBAL const real4* RESTRICT posqCorrection, Matrix3 Q, bool stale,
+        mixed3 origin, mixed3 center, Matrix3 delta) {
     if (stale) {
-        for (int k = start; k < end; k++) {
+        for (int k = first; k < end; k += stride) {
             const mixed3 a = loadPosition(posq, posqCorrection, bodyAtoms[k]) - origin - center;
             reference[k] = make_mixed4(a.x, a.y, a.z, 0);
         }
@@ -120,8 +122,62 @@ INLINE_DEVICE Matrix3 turnOrientation(int body, int start, int end, GLOBAL const
     Matrix3 P = delta;
     P.m00 += 1; P.m11 += 1; P.m22 += 1;
     Q = polarStep(multiply(P, Q));
-    storeOrientation(orientation, body, Q);
+    if (leader)
+        storeOrientation(orientation, body, Q);
     return Q;
+}
+
+/** Whether a body's shape is rebuilt from its reference and orientation (single and mixed precision). */
+INLINE_DEVICE bool fittedShape(int shape) {
+#ifdef REBUILD_SHAPES
+    return shape != SHAPE_POINT;
+#else
+    return false;  // double precision: no round-off worth rebuilding from
+#endif
+}
+
+/**
+ * The reset of a body from its sums (gathered before anything was written): the rotation,
+ * then the new positions and velocities of the atoms first, first + stride, ... < end (the
+ * leader stores the orientation). A linear body's rotation reads every atom, so only a
+ * single work item (stride 1) resets one. Returns false if no rotation was found.
+ */
+INLINE_DEVICE bool finishReset(int body, int start, int end, int first, int stride, BodySums sums,
+        Matrix3 oldOrientation, GLOBAL const int* RESTRICT bodyAtoms, GLOBAL mixed4* RESTRICT reference,
+        GLOBAL mixed* RESTRICT orientation, int shape, mixed h, GLOBAL real4* RESTRICT posq,
+        GLOBAL real4* RESTRICT posqCorrection, GLOBAL mixed4* RESTRICT velm) {
+    const bool fitted = fittedShape(shape);
+    const mixed3 origin = sums.origin, center = sums.center, V = sums.V;
+    if (!(dot(V, V) <= FINITE_BOUND && dot(center, center) <= FINITE_BOUND))
+        return false;  // inf or NaN
+    Matrix3 delta = zeroMatrix();
+    const bool converged = shape == SHAPE_POINT || (shape == SHAPE_GENERAL ?
+            solveRotation(sums.J, h*sums.L, &delta) :
+            solveLinearBodyRotation(start, end, bodyAtoms, posq, posqCorrection, velm, origin, center, V, h, &delta));
+    if (!converged)
+        return false;
+    const bool stale = !(sums.shapeError <= STALE_REFERENCE*STALE_REFERENCE);
+    const Matrix3 rotation = (fitted ? turnOrientation(body, first, end, stride, first == start, bodyAtoms, reference,
+                                                       orientation, posq, posqCorrection, oldOrientation, stale, origin,
+                                                       center, delta) : delta);
+    const mixed3 shift = h*V;
+    const mixed3 newCenter = origin + (center + shift);
+    const mixed invH = 1/h;
+    for (int k = first; k < end; k += stride) {
+        const int atom = bodyAtoms[k];
+        const mixed3 x = loadPosition(posq, posqCorrection, atom);
+        const mixed3 turn = apply(delta, x - origin - center);
+        if (fitted) {
+            const mixed4 q = reference[k];
+            const mixed3 ref = make_mixed3(q.x, q.y, q.z);
+            storePosition(posq, posqCorrection, atom, newCenter + apply(rotation, ref));
+        }
+        else
+            storePosition(posq, posqCorrection, atom, x + (shift + turn));
+        const mixed4 v = velm[atom];
+        velm[atom] = make_mixed4(V.x + turn.x*invH, V.y + turn.y*invH, V.z + turn.z*invH, v.w);
+    }
+    return true;
 }
 
 /**
@@ -137,41 +193,9 @@ INLINE_DEVICE Matrix3 turnOrientation(int body, int start, int end, GLOBAL const
 INLINE_DEVICE bool resetBody(int body, int start, int end, GLOBAL const int* RESTRICT bodyAtoms, GLOBAL mixed4* RESTRICT reference,
         GLOBAL mixed* RESTRICT orientation, int shape, mixed h, GLOBAL real4* RESTRICT posq,
         GLOBAL real4* RESTRICT posqCorrection, GLOBAL mixed4* RESTRICT velm) {
-#ifdef REBUILD_SHAPES
-    const bool fitted = (shape != SHAPE_POINT);
-#else
-    const bool fitted = false;  // double precision: no round-off worth rebuilding from
-#endif
+    const bool fitted = fittedShape(shape);
     const Matrix3 oldOrientation = (fitted ? loadOrientation(orientation, body) : zeroMatrix());
     const BodySums sums = gatherBody(start, end, bodyAtoms, posq, posqCorrection, velm, fitted, reference, oldOrientation);
-    const mixed3 origin = sums.origin, center = sums.center, V = sums.V;
-    if (!(dot(V, V) <= FINITE_BOUND && dot(center, center) <= FINITE_BOUND))
-        return false;  // inf or NaN
-    Matrix3 delta = zeroMatrix();
-    const bool converged = shape == SHAPE_POINT || (shape == SHAPE_GENERAL ?
-            solveRotation(sums.J, h*sums.L, &delta) :
-            solveLinearBodyRotation(start, end, bodyAtoms, posq, posqCorrection, velm, origin, center, V, h, &delta));
-    if (!converged)
-        return false;
-    const bool stale = !(sums.shapeError <= STALE_REFERENCE*STALE_REFERENCE);
-    const Matrix3 rotation = (fitted ? turnOrientation(body, start, end, bodyAtoms, reference, orientation, posq,
-                                                       posqCorrection, oldOrientation, stale, origin, center, delta) : delta);
-    const mixed3 shift = h*V;
-    const mixed3 newCenter = origin + (center + shift);
-    const mixed invH = 1/h;
-    for (int k = start; k < end; k++) {
-        const int atom = bodyAtoms[k];
-        const mixed3 x = loadPosition(posq, posqCorrection, atom);
-        const mixed3 turn = apply(delta, x - origin - center);
-        if (fitted) {
-            const mixed4 q = reference[k];
-            const mixed3 ref = make_mixed3(q.x, q.y, q.z);
-            storePosition(posq, posqCorrection, atom, newCenter + apply(rotation, ref));
-        }
-        else
-            storePosition(posq, posqCorrection, atom, x + (shift + turn));
-        const mixed4 v = velm[atom];
-        velm[atom] = make_mixed4(V.x + turn.x*invH, V.y + turn.y*invH, V.z + turn.z*invH, v.w);
-    }
-    return true;
+    return finishReset(body, start, end, start, 1, sums, oldOrientation, bodyAtoms, reference, orientation, shape, h,
+                       posq, posqCorrection, velm);
 }

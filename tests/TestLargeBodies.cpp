@@ -1,0 +1,173 @@
+/*
+ * Bodies above the device's size threshold (CommonRigidBodyState::LargeBodyAtoms), which a
+ * work group moves with its sums reduced in local memory, beside small bodies and free atoms,
+ * for every integrator on every device platform: in double precision the step follows
+ * Reference's and velocities set from the host are projected as Reference projects them
+ * (rigid ones kept bit for bit); in mixed precision, where each body is rebuilt from its
+ * reference geometry, the bodies stay rigid; a failed step puts every atom back at its start
+ * (the step's first launch backs up the large bodies too when the flag is already set).
+ */
+#include "TestSupport.h"
+#include "openmm/CustomExternalForce.h"
+#include <gtest/gtest.h>
+#include <cstdlib>
+#include <iostream>
+#include <random>
+
+using namespace OpenMM;
+using namespace MRattlePlugin;
+using namespace MRattleTest;
+using std::vector;
+
+namespace {
+
+const int LargeBodyAtoms = 150;   // above the threshold (64), not a multiple of the work group (64)
+
+struct LargeBodySystem {
+    System system;
+    vector<Vec3> positions;
+    vector<vector<int> > bodies;
+};
+
+/**
+ * Two blobs of LargeBodyAtoms atoms, four waters and three free atoms, each atom held by a
+ * spring to a point off its own position, so that the bodies turn as they move.
+ */
+LargeBodySystem largeBodySystem() {
+    LargeBodySystem s;
+    std::mt19937 generator(11);
+    std::uniform_real_distribution<double> uniform(-1.0, 1.0);
+    CustomExternalForce* spring = new CustomExternalForce("0.5*k*((x-x0)^2+(y-y0)^2+(z-z0)^2)");
+    for (const char* name : {"k", "x0", "y0", "z0"})
+        spring->addPerParticleParameter(name);
+    s.system.addForce(spring);
+    auto add = [&](double mass, const Vec3& x) {
+        const int atom = s.system.addParticle(mass);
+        s.positions.push_back(x);
+        const Vec3 anchor = x + Vec3(uniform(generator), uniform(generator), uniform(generator)) * 0.05;
+        spring->addParticle(atom, {50.0 + 50.0 * (atom % 3), anchor[0], anchor[1], anchor[2]});
+        return atom;
+    };
+    for (int blob = 0; blob < 2; blob++) {
+        vector<int> body;
+        const Vec3 center(2.0 * blob, 0, 0);
+        for (int k = 0; k < LargeBodyAtoms; k++)
+            body.push_back(add(12.0 + 4.0 * (k % 2), center + Vec3(uniform(generator), uniform(generator),
+                                                                  0.5 * uniform(generator)) * 0.8));
+        s.bodies.push_back(body);
+    }
+    for (int w = 0; w < 4; w++) {
+        const Vec3 o(0.5 * w, 1.5, 0);
+        s.bodies.push_back({add(15.999, o), add(1.008, o + Vec3(0.09572, 0, 0)), add(1.008, o + Vec3(-0.024, 0.0927, 0))});
+    }
+    for (int f = 0; f < 3; f++)
+        add(20.0, Vec3(0.6 * f, -1.5, 0));
+    return s;
+}
+
+std::unique_ptr<Context> contextOf(const LargeBodySystem& s, RigidBodyIntegrator& integrator,
+                                   const std::string& platformName, const std::string& precision) {
+    for (const vector<int>& body : s.bodies)
+        integrator.addRigidBody(body);
+    std::map<std::string, std::string> properties;
+    if (isDevicePlatform(platformName))
+        properties["Precision"] = precision;
+    std::unique_ptr<Context> context(new Context(s.system, integrator, platform(platformName), properties));
+    context->setPositions(s.positions);
+    return context;
+}
+
+vector<Config> deviceConfigs() {
+    vector<Config> configs;
+    for (const Config& config : allConfigs())
+        if (isDevicePlatform(config.platform))
+            configs.push_back(config);
+    return configs;
+}
+
+class LargeBodies : public RigidBodyTest {};
+
+} // namespace
+
+TEST_P(LargeBodies, FollowReferenceInDoublePrecision) {
+    const LargeBodySystem s = largeBodySystem();
+    std::unique_ptr<RigidBodyIntegrator> onReference = makeIntegrator(0.001), onDevice = makeIntegrator(0.001);
+    if (GetParam().traits().stochastic)
+        for (RigidBodyIntegrator* integrator : {onReference.get(), onDevice.get()})
+            GetParam().traits().removeNoise(*integrator);
+    std::unique_ptr<Context> reference = contextOf(s, *onReference, "Reference", "double");
+    std::unique_ptr<Context> device = contextOf(s, *onDevice, GetParam().platform, "double");
+    reference->setVelocitiesToTemperature(300, 5);
+    const vector<Vec3> start = reference->getState(State::Velocities).getVelocities();
+    device->setVelocities(start);
+    const vector<Vec3> kept = device->getState(State::Velocities).getVelocities();
+    EXPECT_EQ(0.0, maxDeviation(start, kept)) << "rigid velocities set on the device are kept bit for bit";
+
+    // Velocities that are not rigid: the device's projection is Reference's.
+    std::mt19937 generator(2);
+    std::normal_distribution<double> normal(0.0, 0.5);
+    vector<Vec3> random(s.positions.size());
+    for (Vec3& v : random)
+        v = Vec3(normal(generator), normal(generator), normal(generator));
+    reference->setVelocities(random);
+    device->setVelocities(random);
+    const double projected = maxDeviation(reference->getState(State::Velocities).getVelocities(),
+                                          device->getState(State::Velocities).getVelocities());
+    EXPECT_LT(projected, 1e-12);
+    EXPECT_GT(maxDeviation(random, device->getState(State::Velocities).getVelocities()), 0.1);  // they were projected
+
+    reference->setVelocities(start);
+    device->setVelocities(start);
+    onReference->step(200);
+    onDevice->step(200);
+    const vector<Vec3> a = reference->getState(State::Positions).getPositions();
+    const vector<Vec3> b = device->getState(State::Positions).getPositions();
+    std::cout << GetParam().platform << " " << GetParam().integrator << ": projection " << projected
+              << " from Reference's; after 200 steps " << maxDeviation(a, b) << " nm from Reference, bodies rigid to "
+              << maxDistanceChange(s.positions, b, s.bodies) << " nm" << std::endl;
+    EXPECT_GT(maxDeviation(s.positions, a), 1e-3);  // the bodies moved
+    EXPECT_LT(maxDeviation(a, b), 1e-6);  // fixed-point device forces: 7e-8 nm with one body per work item too
+    EXPECT_LT(maxDistanceChange(s.positions, b, s.bodies), 1e-11);
+}
+
+TEST_P(LargeBodies, StayRigidInMixedPrecision) {
+    const LargeBodySystem s = largeBodySystem();
+    std::unique_ptr<RigidBodyIntegrator> integrator = makeIntegrator(0.001);
+    std::unique_ptr<Context> device = contextOf(s, *integrator, GetParam().platform, "mixed");
+    device->setVelocitiesToTemperature(300, 5);
+    integrator->step(500);
+    const vector<Vec3> b = device->getState(State::Positions).getPositions();
+    const double change = maxDistanceChange(s.positions, b, s.bodies);
+    std::cout << GetParam().platform << " " << GetParam().integrator << " (mixed): after 500 steps bodies rigid to "
+              << change << " nm, moved " << maxDeviation(s.positions, b) << " nm" << std::endl;
+    EXPECT_GT(maxDeviation(s.positions, b), 1e-3);
+    EXPECT_LT(change, 1e-6);
+}
+
+TEST_P(LargeBodies, AFailedStepPutsEveryAtomBackAtItsStart) {
+    // The hook MRATTLE_TEST_FAIL_AT_STEP sets the failure flag before the step's first launch,
+    // as if a work group of it had failed first (TestDevicePlatforms' test for small bodies).
+    const LargeBodySystem s = largeBodySystem();
+    const int failAt = 7;
+    std::unique_ptr<RigidBodyIntegrator> straight = makeIntegrator(0.001);
+    std::unique_ptr<Context> context = contextOf(s, *straight, GetParam().platform, "double");
+    context->setVelocitiesToTemperature(300, 5);
+    const vector<Vec3> velocities = context->getState(State::Velocities).getVelocities();
+    straight->step(failAt);
+    const State before = context->getState(State::Positions | State::Velocities);
+
+    std::unique_ptr<RigidBodyIntegrator> failing = makeIntegrator(0.001);
+    setenv("MRATTLE_TEST_FAIL_AT_STEP", std::to_string(failAt).c_str(), 1);
+    std::unique_ptr<Context> failed = contextOf(s, *failing, GetParam().platform, "double");
+    unsetenv("MRATTLE_TEST_FAIL_AT_STEP");
+    failed->setVelocities(velocities);
+    const std::string message = messageOf([&] { failing->step(20); });
+    EXPECT_NE(std::string::npos, message.find("at step " + std::to_string(failAt) + " ")) << message;
+    const State state = failed->getState(State::Positions | State::Velocities);
+    EXPECT_EQ(failAt, state.getStepCount());
+    EXPECT_EQ(0.0, maxDeviation(before.getPositions(), state.getPositions()));
+    EXPECT_EQ(0.0, maxDeviation(before.getVelocities(), state.getVelocities()));
+}
+
+INSTANTIATE_TEST_SUITE_P(Devices, LargeBodies, ::testing::ValuesIn(deviceConfigs()), configName);
+GTEST_ALLOW_UNINSTANTIATED_PARAMETERIZED_TEST(LargeBodies);
