@@ -4,9 +4,9 @@
     paper                   M-RATTLE against the splitting method: accuracy, cost, sampling, drift
     validate-langevin       MRattleLangevinIntegrator against LangevinMiddle + SETTLE
     validate-equipartition  rigid water, translational against rotational temperature
-    validate-thermostats    Nose-Hoover chain and CSVR on rigid water [--study step-sizes|density]
+    validate-thermostats    Nose-Hoover chain and CSVR on rigid water [--report-from CSV]
     validate-drude          the Drude integrators against OpenMM's + SETTLE on SWM4-NDP (its table: results/drude.md)
-    validate-minimization, validate-minimization-starts   studies with options of their own
+    validate-minimization   RigidBodyMinimizer against LocalEnergyMinimizer (options of its own: --help)
 
 --quick: tiny runs written to a scratch folder (a smoke test); --only: some parts of a target.
 Every table and plot in docs/results.md comes from these runs; report.py writes the markdown
@@ -22,7 +22,7 @@ ROOT = os.path.dirname(os.path.dirname(HERE))
 TARGETS = {"paper": ("accuracy", "cost", "sampling", "drift"),
            "validate-langevin": ("langevin",), "validate-equipartition": ("equipartition",),
            "validate-thermostats": ("thermostats",), "validate-drude": ("drude",)}
-STUDIES = {"validate-minimization": "compare", "validate-minimization-starts": "starts"}  # of suite/minimization.py
+STUDIES = {"validate-minimization": "compare"}  # of suite/minimization.py
 
 
 def parse(argv):
@@ -33,8 +33,6 @@ def parse(argv):
     p.add_argument("--out", default=None, help="output folder (default docs/, or a scratch folder with --quick)")
     p.add_argument("--only", help="comma-separated parts of the target to run")
     thermostats = p.add_argument_group("validate-thermostats")
-    thermostats.add_argument("--study", choices=("step-sizes", "density"),
-                             help="a follow-up study instead of the main runs (its CSV only)")
     thermostats.add_argument("--report-from", help="report a finished run from its CSV instead of running")
     thermostats.add_argument("--threads", type=int, default=1, help="CPU platform threads")
     return p.parse_args(argv)
@@ -137,8 +135,6 @@ def main(argv=None):
         log("thermostats: Nose-Hoover chain and CSVR on rigid TIP3P water (canonical sampling, drift, diffusion)")
         from suite import thermostats
         md += thermostats.validate(args, q, os.path.join(results_dir, "thermostats"), log)
-        if args.study:
-            return  # their CSV only: the section is reported from the main run's CSV with --report-from
 
     path = os.path.join(out, "results.md")
     command = [a for i, a in enumerate(argv) if a != "--build" and (i == 0 or argv[i - 1] != "--build")]
