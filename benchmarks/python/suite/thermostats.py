@@ -10,7 +10,7 @@ from openmm import unit
 import mrattle
 
 from .common import (KB, TEMPERATURE, block_mean, context as start_context, equilibrate, masses as masses_of,
-                     read_csv, temperatures, water, water_integrator, write_csv)
+                     temperatures, water, water_integrator, write_csv)
 from .stats import drift_with_error
 
 METHODS = ('M-RATTLE NVE', 'M-RATTLE Nose-Hoover chain', 'M-RATTLE CSVR', 'LangevinMiddle + SETTLE')
@@ -81,7 +81,8 @@ def run(quick, out, log, threads=1):
     start = equilibrate(system, positions, equilibrate_ps, threads)
     rows = []
     for method, step_fs in [(m, h) for m in METHODS for h in STEPS_FS if h == 2 or m != METHODS[3]]:
-        rows.append(run_one(method, step_fs, production_ps if step_fs == 2 else short_ps, start, system, bodies, threads))
+        ps = production_ps if step_fs == 2 else short_ps
+        rows.append(run_one(method, step_fs, ps, start, system, bodies, threads))
         log('thermostats: %s' % rows[-1])
         write_csv(out + '.csv', rows, CSV_COLUMNS)
     return report(rows, len(bodies), quick, production_ps, short_ps, equilibrate_ps, threads)
@@ -156,10 +157,3 @@ def report(rows, molecules, quick, production_ps, short_ps, equilibrate_ps, thre
             md.append('| %s | %g | %g | %s |' % (row['method'], row['step_fs'], row['ps'],
                                                 pm(row, 'drift_kJ_per_mol_ns_per_molecule', 'drift_se', 3)))
     return md
-
-
-def validate(args, quick, out, log):
-    """`./benchmarks/run.sh validate-thermostats`: the runs, or (--report-from) their CSV reported."""
-    if args.report_from:
-        return report(read_csv(args.report_from), 895, False, 20.0, 2.0, 2.0, 1)
-    return run(quick, out, log, args.threads)
