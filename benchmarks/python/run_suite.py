@@ -4,9 +4,9 @@
     paper                   M-RATTLE against the splitting method: accuracy, cost, sampling, drift
     validate-langevin       MRattleLangevinIntegrator against LangevinMiddle + SETTLE
     validate-equipartition  rigid water, translational against rotational temperature
-    validate-thermostats    Nose-Hoover chain and CSVR on rigid water [--study step-sizes|density]
+    validate-thermostats    Nose-Hoover chain and CSVR on rigid water [--report-from CSV]
     validate-drude          the Drude integrators against OpenMM's + SETTLE on SWM4-NDP (its table: results/drude.md)
-    validate-minimization, validate-minimization-starts   studies with options of their own
+    validate-minimization   RigidBodyMinimizer against LocalEnergyMinimizer (options of its own: --help)
 
 --quick: tiny runs written to a scratch folder (a smoke test); --only: some parts of a target.
 Every table and plot in docs/results.md comes from these runs; report.py writes the markdown
@@ -22,19 +22,16 @@ ROOT = os.path.dirname(os.path.dirname(HERE))
 TARGETS = {"paper": ("accuracy", "cost", "sampling", "drift"),
            "validate-langevin": ("langevin",), "validate-equipartition": ("equipartition",),
            "validate-thermostats": ("thermostats",), "validate-drude": ("drude",)}
-STUDIES = {"validate-minimization": "compare", "validate-minimization-starts": "starts"}  # of suite/minimization.py
 
 
 def parse(argv):
     p = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    p.add_argument("target", choices=sorted(TARGETS) + sorted(STUDIES))
+    p.add_argument("target", choices=sorted(TARGETS) + ["validate-minimization"])
     p.add_argument("--quick", action="store_true", help="tiny runs for CI smoke tests")
     p.add_argument("--build", default=os.path.join(ROOT, "build"), help="CMake build folder")
     p.add_argument("--out", default=None, help="output folder (default docs/, or a scratch folder with --quick)")
     p.add_argument("--only", help="comma-separated parts of the target to run")
     thermostats = p.add_argument_group("validate-thermostats")
-    thermostats.add_argument("--study", choices=("step-sizes", "density"),
-                             help="a follow-up study instead of the main runs (its CSV only)")
     thermostats.add_argument("--report-from", help="report a finished run from its CSV instead of running")
     thermostats.add_argument("--threads", type=int, default=1, help="CPU platform threads")
     return p.parse_args(argv)
@@ -42,16 +39,15 @@ def parse(argv):
 
 def main(argv=None):
     argv = sys.argv[1:] if argv is None else argv
-    if argv and argv[0] in STUDIES:  # every option is the study's own but --build
+    if argv and argv[0] == "validate-minimization":  # every option is suite/minimization.py's own
         build = argv[argv.index("--build") + 1] if "--build" in argv else os.path.join(ROOT, "build")
-        rest = [a for i, a in enumerate(argv[1:], 1) if a != "--build" and (i < 2 or argv[i - 1] != "--build")]
         sys.path[:0] = [os.path.join(build, "python"), HERE]
         from suite import minimization
-        return getattr(minimization, STUDIES[argv[0]])(rest + ["--build", build])
+        return minimization.compare(argv[1:])
     args = parse(argv)
     sys.path[:0] = [os.path.join(args.build, "python"), HERE]
     from suite import accuracy, cost, langevin, long_drift, sampling
-    from suite.common import write_csv
+    from suite.common import read_csv, write_csv
     import report
 
     out = args.out or (os.path.join(args.build, "results-quick") if args.quick else os.path.join(ROOT, "docs"))
@@ -136,9 +132,10 @@ def main(argv=None):
     if "thermostats" in parts:
         log("thermostats: Nose-Hoover chain and CSVR on rigid TIP3P water (canonical sampling, drift, diffusion)")
         from suite import thermostats
-        md += thermostats.validate(args, q, os.path.join(results_dir, "thermostats"), log)
-        if args.study:
-            return  # their CSV only: the section is reported from the main run's CSV with --report-from
+        if args.report_from:  # the section from a finished run's CSV (its settings: the full run's)
+            md += thermostats.report(read_csv(args.report_from), 895, False, 20.0, 2.0, 2.0, 1)
+        else:
+            md += thermostats.run(q, os.path.join(results_dir, "thermostats"), log, args.threads)
 
     path = os.path.join(out, "results.md")
     command = [a for i, a in enumerate(argv) if a != "--build" and (i == 0 or argv[i - 1] != "--build")]

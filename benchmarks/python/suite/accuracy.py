@@ -14,7 +14,7 @@ def _positions(model):
 
 
 def _bodies(model):
-    return common.benzene_bodies(model.system.getNumParticles())
+    return mrattle.rigidBodies(model.topology, model.system, 'BNZ')
 
 
 def _angular_momentum(system, state=None, x=None, v=None):

@@ -163,11 +163,6 @@ def machine_description():
     return "%s, %d cores visible, OpenMM %s" % (model, os.cpu_count() or 0, openmm.Platform.getOpenMMVersion())
 
 
-def benzene_bodies(num_particles):
-    """The bodies of the benzene models (12 consecutive atoms per molecule)."""
-    return [list(range(12 * m, 12 * m + 12)) for m in range(num_particles // 12)]
-
-
 def interleaved(integrators, steps, batches):
     """Seconds per step of each integrator in `batches` rounds that interleave them, so that all share the
     machine's load. integrators: {name: integrator}; steps: {name: steps per batch}."""
@@ -253,14 +248,13 @@ def water(pdb_name="tip3p.pdb", forcefield_name="amber14/tip3p.xml", barostat_se
 
 
 def equilibrate(system, positions, ps, threads, seed=11):
-    """LangevinMiddle + SETTLE at 300 K, 1/ps, 2 fs: the start of every run of a water study. Under a
-    barostat the System's default box becomes the one reached, so that runs start in it."""
+    """LangevinMiddle + SETTLE at 300 K, 1/ps, 2 fs: the start of every run of a water study (no barostat: the
+    runs start in the System's default box)."""
     integrator = openmm.LangevinMiddleIntegrator(TEMPERATURE * unit.kelvin, 1 / unit.picosecond, 2 * unit.femtoseconds)
     integrator.setRandomNumberSeed(seed)
     c = context(system, integrator, positions, (TEMPERATURE * unit.kelvin, seed), "CPU", threads)
     integrator.step(int(round(ps / 0.002)))
     state = c.getState(getPositions=True, getVelocities=True)
-    system.setDefaultPeriodicBoxVectors(*state.getPeriodicBoxVectors())
     return state.getPositions(asNumpy=True), state.getVelocities(asNumpy=True)
 
 

@@ -150,7 +150,7 @@ def paper_systems(platforms, batches, batch_seconds, log):
     rows = []
     for label, model in (("isolated benzene", mrattle.models.benzene()),
                          ("27-benzene cluster", mrattle.models.benzeneCluster(temperature=250 * unit.kelvin, seed=1))):
-        bodies = common.benzene_bodies(model.system.getNumParticles())
+        bodies = mrattle.rigidBodies(model.topology, model.system, 'BNZ')
         x = np.array(model.positions.value_in_unit(unit.nanometer))
         v = common.rigid_velocities(model.system, x, bodies, 300.0, seed=2)
         for platform_name in platforms:

@@ -11,7 +11,7 @@ import openmm
 from openmm import app, unit
 
 import mrattle
-from .common import KB, TEMPERATURE, context, interleaved, machine_description, masses as masses_of
+from .common import KB, TEMPERATURE, context, density, interleaved, machine_description, masses as masses_of, removes_cm
 
 STEP, DRUDE_T, WALL = 0.001, 1.0, 0.02  # ps, K, nm: OpenMM's tests' settings and its default hard wall
 COUPLING = {'Langevin': (1.0, 10.0), 'Nose-Hoover': (1.0, 10.0)}  # 1/ps: the bodies', the Drude particles'
@@ -57,8 +57,7 @@ class Temperatures:
     def __init__(self, system, pairs):
         self.m, self.pairs = masses_of(system), pairs
         self.reduced = 1 / (1 / self.m[pairs[:, 0]] + 1 / self.m[pairs[:, 1]])
-        self.dof = 3 * (np.count_nonzero(self.m) - len(pairs)) - system.getNumConstraints() - 3 * any(
-            isinstance(f, openmm.CMMotionRemover) for f in system.getForces())
+        self.dof = 3 * (np.count_nonzero(self.m) - len(pairs)) - system.getNumConstraints() - 3 * removes_cm(system)
         scratch = openmm.XmlSerializer.clone(system)  # OpenMM's velocity constraints (SETTLE) and thermal velocities
         for i in reversed(range(scratch.getNumForces())):
             if not isinstance(scratch.getForce(i), openmm.DrudeForce):
@@ -101,9 +100,8 @@ def replica(name, model, start, seed, s, npt):
     for _ in range(s['npt' if npt else 'nvt'] // s['sample']):
         it.step(s['sample'])
         state = c.getState(getEnergy=True, getVelocities=not npt, getPositions=not npt, getForces=not npt)
-        a, b, cc = state.getPeriodicBoxVectors(asNumpy=True).value_in_unit(unit.nanometer)
         row = dict(U=state.getPotentialEnergy().value_in_unit(unit.kilojoule_per_mole) / len(bodies),
-                   density=temperatures.m.sum() * 1.66053906660e-3 / (a[0] * b[1] * cc[2]))  # g/mL
+                   density=density(state, temperatures.m))
         if not npt:  # the velocities as they are (OpenMM 8's computeDrudeTemperature()) and, for DrudeLangevin,
             row['T_body'], row['T_drude'] = temperatures(state)  # shifted by h/2 as its getKineticEnergy() (7.7, 8)
             if name == ('Langevin', False):

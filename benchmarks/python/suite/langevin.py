@@ -4,12 +4,10 @@ import math
 import time
 
 import numpy as np
-import openmm
 from openmm import unit
 
-import mrattle
 from .common import (KB, block_mean, context as start_context, density, masses as masses_of, removes_cm, rigid_split,
-                     temperatures, water, water_integrator, write_csv)
+                     water, water_integrator, write_csv)
 
 
 def verdict(value, error, target, tolerance):
@@ -71,31 +69,6 @@ def run_water(method, barostat, equilibrate, production, sample, seed, log):
     return result
 
 
-def benzene_temperatures(step_fs, steps, log, equilibration_ps=20.0):
-    model = mrattle.models.benzeneLiquid()
-    integrator = mrattle.MRattleLangevinIntegrator(298 * unit.kelvin, 1 / unit.picosecond, step_fs * unit.femtoseconds)
-    integrator.setRandomNumberSeed(7)
-    context = start_context(model.system, integrator, model.positions, (298 * unit.kelvin, 1))
-    bodies, masses, cm = integrator.getBodiesInEffect(), masses_of(model.system), removes_cm(model.system)
-    try:
-        integrator.step(int(1000 * equilibration_ps / step_fs))  # from the lattice
-        trans, rot = [], []
-        for k in range(steps):
-            integrator.step(max(1, int(20 / step_fs)))
-            v = context.getState(getVelocities=True).getVelocities(asNumpy=True).value_in_unit(
-                unit.nanometers / unit.picosecond)
-            tt, tr = temperatures(v, masses, bodies, cm)
-            if not (math.isfinite(tt) and math.isfinite(tr)):
-                return None
-            trans.append(tt)
-            rot.append(tr)
-    except openmm.OpenMMException as error:
-        log('benzene at %g fs: %s' % (step_fs, error))
-        return None
-    log('benzene at %g fs done' % step_fs)
-    return block_mean(trans), block_mean(rot)
-
-
 def run(quick, out, log):
     """Run the validation; write out + '.csv'; return the report as markdown lines."""
     scale = 0.02 if quick else 1.0
@@ -141,20 +114,6 @@ def run(quick, out, log):
         fmt(dm, 4), fmt(ds, 4), dm[0] - ds[0], math.hypot(dm[1], ds[1])))
     row('density', dm, ds)
 
-    report += ['\n### Rigid liquid benzene (64 molecules, PME) at 298 K\n', '| Step (fs) | translational T (K) | '
-               'rotational T (K) | translational within 2% | rotational within 2% |', '|---|---|---|---|---|']
-    largest_stable = None
-    for step in (2, 4, 8, 12, 16):
-        result = benzene_temperatures(step, int(500 * (0.04 if quick else 1)), log, 0.2 if quick else 20.0)
-        if result is None:
-            report.append('| %d | unstable | unstable | no | no |' % step)
-            continue
-        largest_stable = step
-        (tt, te), (tr, re) = result
-        report.append('| %d | %.1f +- %.1f | %.1f +- %.1f | %s | %s |' % (
-            step, tt, te, tr, re, verdict(tt, te, 298, 0.02), verdict(tr, re, 298, 0.02)))
-        row('benzene_%dfs' % step, (tt, te), (tr, re))
-    report.append('\nLargest step tried that stayed stable for the run: %s fs.' % largest_stable)
     write_csv(out + '.csv', rows)
     return report
 

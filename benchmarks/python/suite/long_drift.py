@@ -26,7 +26,7 @@ def equilibrated_start(temperature, seed, equilibrate_ps, log):
     state = context.getState(getPositions=True, getVelocities=True)
     x = np.array(state.getPositions(asNumpy=True).value_in_unit(unit.nanometer))
     v = np.array(state.getVelocities(asNumpy=True).value_in_unit(unit.nanometer / unit.picosecond))
-    bodies = common.benzene_bodies(model.system.getNumParticles())
+    bodies = mrattle.rigidBodies(model.topology, model.system, 'BNZ')
     return model.system, x, without_net_motion(x, v, common.masses(model.system)), bodies
 
 

@@ -1,12 +1,8 @@
-"""RigidBodyMinimizer against OpenMM's LocalEnergyMinimizer (docs/minimization.md), two studies:
+"""RigidBodyMinimizer against OpenMM's LocalEnergyMinimizer (docs/minimization.md):
 
     ./benchmarks/run.sh validate-minimization [--platform CPU] [--quick] [--only NAME] [--repeats 3]
         each System minimized by both from one start, timed; LocalEnergyMinimizer's iterations counted in a second,
         untimed run by the C++ program minimizer_iterations: a table, docs/results/minimization.csv
-    ./benchmarks/run.sh validate-minimization-starts [--starts 8] [--sigma 0.005] [--tolerances 10 5 2 1]
-        both minimizers' final energies on tip3p.pdb from many starts (where a minimizer stops depends on its
-        path, and its path on round-off); LocalEnergyMinimizer's end read with the rigid minimizer's own test of
-        the RMS generalized force: a table, docs/results/minimization_starts.csv and .png
 """
 import argparse
 import math
@@ -28,14 +24,6 @@ DATA = os.path.join(os.path.dirname(app.__file__), 'data')
 
 def nm(state):
     return state.getPositions(asNumpy=True).value_in_unit(unit.nanometer)
-
-
-def parser(description, out):
-    p = argparse.ArgumentParser(description=description)
-    p.add_argument('--build', default=os.path.join(ROOT, 'build'))
-    p.add_argument('--platform', default='CPU')
-    p.add_argument('--out', default=os.path.join(ROOT, 'docs', 'results', out))
-    return p
 
 
 def cases(quick):
@@ -158,7 +146,10 @@ def compare_one(name, tolerance, system, positions, bodies, platform, repeats, p
 
 
 def compare(argv=None):
-    parser_ = parser('RigidBodyMinimizer against LocalEnergyMinimizer on several Systems', 'minimization.csv')
+    parser_ = argparse.ArgumentParser(description='RigidBodyMinimizer against LocalEnergyMinimizer on several Systems')
+    parser_.add_argument('--build', default=os.path.join(ROOT, 'build'))
+    parser_.add_argument('--platform', default='CPU')
+    parser_.add_argument('--out', default=os.path.join(ROOT, 'docs', 'results', 'minimization.csv'))
     parser_.add_argument('--quick', action='store_true', help='the benzene cluster only')
     parser_.add_argument('--only', help='the cases whose name contains this (no CSV is written)')
     parser_.add_argument('--repeats', type=int, default=3, help='runs of each minimizer, alternated; the fastest counts')
@@ -189,86 +180,3 @@ def compare(argv=None):
             float(r['energy_after']), float(r['rms_force']), r['max_shape_change'], float(r['seconds'])))
     print('\n' + ''.join('- %s\n' % n for n in notes + ['%s, %s: %s' % (r['case'], r['minimizer'], r['note'])
                                                      for r in rows if r['note']]))
-
-
-def starts(argv=None):
-    parser_ = parser('Both minimizers on tip3p.pdb from many starts', 'minimization_starts.csv')
-    parser_.add_argument('--threads', default='2', help='CPU threads (only round-off depends on it)')
-    parser_.add_argument('--starts', type=int, default=8)
-    parser_.add_argument('--sigma', type=float, default=0.005, help='nm, per component of each water\'s translation')
-    parser_.add_argument('--tolerances', type=float, nargs='+', default=[10.0, 5.0, 2.0, 1.0])
-    args = parser_.parse_args(argv)
-
-    pdb = app.PDBFile(os.path.join(DATA, 'tip3p.pdb'))
-    system = app.ForceField('tip3p.xml').createSystem(pdb.topology, nonbondedMethod=app.PME, rigidWater=True)
-    platform = openmm.Platform.getPlatformByName(args.platform)
-    properties = {'Threads': args.threads} if platform.getName() == 'CPU' else {}
-    rigid = openmm.Context(system, mrattle.MRattleIntegrator(1 * unit.femtoseconds), platform, properties)
-    settle = openmm.Context(system, openmm.VerletIntegrator(1 * unit.femtoseconds), platform, properties)
-    rigid.setPositions(pdb.positions)
-    exact = nm(rigid.getState(getPositions=True))
-    waters = [[atom.index for atom in residue.atoms()] for residue in pdb.topology.residues()]
-    kJ = unit.kilojoules_per_mole
-
-    rows = []
-    for start in range(args.starts):
-        positions = np.array(exact)
-        if start > 0:
-            rng = np.random.default_rng(start)
-            for water in waters:
-                positions[water] += rng.normal(0.0, args.sigma, 3)
-        for tolerance in args.tolerances:
-            rigid.setPositions(positions)
-            report = mrattle.minimizeEnergy(rigid, tolerance * kJ / unit.nanometer)
-            settle.setPositions(positions)
-            openmm.LocalEnergyMinimizer.minimize(settle, tolerance)
-            # Read LocalEnergyMinimizer's end with the rigid test: no iteration at a huge tolerance.
-            rigid.setPositions(settle.getState(getPositions=True).getPositions())
-            atOpenMMsEnd = mrattle.minimizeEnergy(rigid, 1e9 * kJ / unit.nanometer)
-            rigid.setPositions(settle.getState(getPositions=True).getPositions())
-            passes = mrattle.minimizeEnergy(rigid, tolerance * kJ / unit.nanometer).iterations == 0
-            row = dict(start=start, tolerance=tolerance, rigid_iterations=report.iterations,
-                       rigid_energy=report.finalEnergy, rigid_rms_force=report.rmsForce,
-                       openmm_energy=settle.getState(getEnergy=True).getPotentialEnergy().value_in_unit(kJ),
-                       openmm_rms_force=atOpenMMsEnd.rmsForce, openmm_end_passes_rigid_test=passes)
-            row['gap'] = row['rigid_energy'] - row['openmm_energy']
-            # The rigid minimizer stopped at the RMS generalized force LocalEnergyMinimizer reached.
-            rigid.setPositions(positions)
-            matched = mrattle.minimizeEnergy(rigid, row['openmm_rms_force'] * kJ / unit.nanometer)
-            row['matched_rigid_energy'] = matched.finalEnergy
-            row['matched_gap'] = matched.finalEnergy - row['openmm_energy']
-            rows.append(row)
-            print(row, flush=True)
-    common.write_csv(args.out, rows)
-
-    print('\n%d starts (sigma %g nm), %s platform, OpenMM %s; mean +- standard error over the starts\n'
-          % (args.starts, args.sigma, platform.getName(), openmm.version.full_version))
-    print('| tolerance | rigid final energy | rigid iterations | LocalEnergyMinimizer final energy | '
-          'rigid - LocalEnergyMinimizer | starts where rigid is lower | rigid RMS force | '
-          'LocalEnergyMinimizer RMS force (rigid test) | rigid to that RMS force - LocalEnergyMinimizer |')
-    print('|---|---|---|---|---|---|---|---|---|')
-    summary = []
-    for tolerance in args.tolerances:
-        mine = [r for r in rows if r['tolerance'] == tolerance]
-        stats = {key: (np.mean([r[key] for r in mine]), np.std([r[key] for r in mine], ddof=1) / math.sqrt(len(mine)))
-                 for key in ('rigid_energy', 'rigid_iterations', 'openmm_energy', 'gap', 'rigid_rms_force',
-                             'openmm_rms_force', 'matched_gap')}
-        lower = sum(r['gap'] < 0 for r in mine)
-        summary.append((tolerance, stats))
-        print('| %g | %.1f +- %.1f | %.0f +- %.0f | %.1f +- %.1f | %.1f +- %.1f | %d of %d | %.2f | %.2f +- %.2f | '
-              '%.1f +- %.1f |' % (tolerance, *stats['rigid_energy'], *stats['rigid_iterations'],
-                                  *stats['openmm_energy'], *stats['gap'], lower, len(mine),
-                                  stats['rigid_rms_force'][0], *stats['openmm_rms_force'], *stats['matched_gap']))
-
-    fig, (ax,) = common.panels(1, 6)
-    tolerances = [t for t, _ in summary]
-    for key, label in (('rigid_energy', 'RigidBodyMinimizer'), ('openmm_energy', 'LocalEnergyMinimizer (SETTLE)')):
-        ax.errorbar(tolerances, [s[key][0] for _, s in summary], yerr=[s[key][1] for _, s in summary],
-                    fmt='o-', capsize=3, label=label)
-    ax.set_xscale('log')
-    ax.set_xlabel('tolerance (kJ/mol/nm)')
-    ax.set_ylabel('final potential energy (kJ/mol)')
-    ax.set_title('tip3p.pdb, %d starts: mean +- standard error' % args.starts)
-    ax.legend()
-    common.save_figure(fig, args.out[:-len('.csv')] + '.png')
-

@@ -22,7 +22,7 @@ def run(method, total_ps, step_fs, temperature, seed, log):
     integrator = common.make_integrator(method, step_fs * common.FS)
     context = common.context(model.system, integrator, model.positions, model.velocities, "CPU", 1)
     n_mol = model.system.getNumParticles() // 12
-    all_masses, bodies = common.masses(model.system), common.benzene_bodies(model.system.getNumParticles())
+    all_masses, bodies = common.masses(model.system), mrattle.rigidBodies(model.topology, model.system, 'BNZ')
     masses = all_masses[:12]
     dof = integrator.getNumDegreesOfFreedom()
     stride = max(1, int(round(0.1 / (step_fs * common.FS))))  # a frame every 100 fs
