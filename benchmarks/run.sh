@@ -37,15 +37,15 @@ if [ "$platform" = CPU ] || [ "$platform" = Reference ]; then
         $([ -n "$quick" ] && echo --bodies 50 --repeats 2 --batch-seconds 0.01)
 fi
 speed=("$build/benchmarks/cpp/device_speed" --platform "$platform" --batch-seconds 0.5)
-[ -n "$quick" ] && speed=("$build/benchmarks/cpp/device_speed" --platform "$platform" --small)
+[ -n "$quick" ] && speed=("$build/benchmarks/cpp/device_speed" --platform "$platform" --batch-seconds 0.2 --repeats 2)
 for precision in $precisions; do
     # Bare (the integration's own cost): 512 and 4,096 waters, 9 interleaved batches.
-    "${speed[@]}" --precision "$precision" --systems bare $([ -n "$quick" ] || echo --waters-per-side 8,16 --repeats 9) \
+    "${speed[@]}" --precision "$precision" --systems bare --waters-per-side $([ -n "$quick" ] && echo 6 || echo 8,16 --repeats 9) \
         --out "$out/$precision.csv" --ratios "$out/$precision-ratios.csv"
     # PME: the integration is a small part of a step, and one Context differs from another of the same
     # integrator by up to 2%: three processes (fresh Contexts) of 7 batches, their ratios pooled.
     for process in 1 2 3; do
-        "${speed[@]}" --precision "$precision" --systems pme $([ -n "$quick" ] || echo --waters-per-side 8 --repeats 7) \
+        "${speed[@]}" --precision "$precision" --systems pme --waters-per-side $([ -n "$quick" ] && echo 6 || echo 8 --repeats 7) \
             --out "$out/$precision-pme-$process.csv" --ratios "$out/$precision-pme-$process-ratios.csv"
     done
     awk -F, 'FNR > 1 { n[$3]++; sum[$3] += log($4); if (!($3 in low) || $4 < low[$3]) low[$3] = $4;

@@ -7,6 +7,7 @@
 #include "MRattleIntegrator.h"
 #include "MRattleLangevinIntegrator.h"
 #include "MRattleNoseHooverIntegrator.h"
+#include "MRattlePlatforms.h"
 #include "OpenMM.h"
 #include <algorithm>
 #include <chrono>
@@ -57,18 +58,11 @@ struct Options {
 
 Options parse(int argc, char** argv) {
     Options options;
-#ifdef MRATTLE_DEVICE_PLUGINS
-    options.plugins = split(MRATTLE_DEVICE_PLUGINS);
-#endif
+    for (const MRattlePlugin::BuiltPlatform& built : MRattlePlugin::BuiltPlatforms)
+        if (built.device)
+            options.plugins.push_back(built.pluginPath);
     for (int i = 1; i < argc; i++) {
         const string flag = argv[i];
-        if (flag == "--small") {
-            options.watersPerSide = {6};
-            options.repeats = 2;
-            options.batchSeconds = 0.2;
-            options.warmup = 5;
-            continue;
-        }
         if (i + 1 >= argc)
             throw std::runtime_error("device_speed: " + flag + " needs a value");
         const string value = argv[++i];
@@ -324,6 +318,16 @@ PairedRatio pairedRatio(const vector<double>& a, const vector<double>& b, bool i
     return {std::exp(mean), std::exp(mean - 2 * error), std::exp(mean + 2 * error)};
 }
 
+/** One line of --ratios: a's times over b's (inverted: b's over a's, as ns/day), against its target, and the paired ratio. */
+void writeRatio(std::ostream& ratios, const string& system, int atoms, const string& measure, const vector<double>& a,
+                const vector<double>& b, bool invert, double target) {
+    const double value = invert ? median(b) / median(a) : median(a) / median(b);
+    const PairedRatio paired = pairedRatio(a, b, invert);
+    ratios << system << "," << atoms << "," << measure << "," << std::setprecision(3) << value << ","
+           << (invert ? ">= " : "<= ") << target << "," << ((invert ? value >= target : value <= target) ? "yes" : "no")
+           << "," << paired.ratio << "," << paired.low << "," << paired.high << std::endl;
+}
+
 } // namespace
 
 int main(int argc, char** argv) {
@@ -439,44 +443,29 @@ int main(int argc, char** argv) {
                 // Bare systems: setState of each Context's own State (positions and velocities), one
                 // call per batch, interleaved; every M-RATTLE integrator's against Verlet + SETTLE's.
                 const auto verlet = std::find(names.begin(), names.end(), "verlet_settle");
-                if (!pme && verlet != names.end()) {
-                    vector<vector<double> > seconds(runs.size());
-                    for (int r = 0; r < options.repeats; r++)
-                        for (size_t i = 0; i < runs.size(); i++) {
-                            const State state = runs[i].context->getState(State::Positions | State::Velocities);
-                            Clock::time_point start = Clock::now();
-                            runs[i].context->setState(state);
-                            runs[i].context->getState(State::Positions);
-                            seconds[i].push_back(std::max(1e-9, secondsSince(start) - sync[i]));
-                        }
-                    const vector<double>& b = seconds[verlet - names.begin()];
-                    for (size_t i = 0; i < runs.size(); i++)
-                        if (runs[i].name.rfind("mrattle", 0) == 0) {
-                            const PairedRatio paired = pairedRatio(seconds[i], b, false);
-                            const double value = median(seconds[i]) / median(b);
-                            ratios << systemName << "," << atoms << "," << runs[i].name << " setState ("
-                                   << std::setprecision(3) << 1e3 * median(seconds[i]) << " ms) over verlet_settle ("
-                                   << 1e3 * median(b) << " ms)," << value << ",<= 2," << (value <= 2 ? "yes" : "no")
-                                   << "," << paired.ratio << "," << paired.low << "," << paired.high << std::endl;
-                        }
-                }
+                vector<vector<double> > setState(runs.size());
+                for (int r = 0; r < (pme || verlet == names.end() ? 0 : options.repeats); r++)
+                    for (size_t i = 0; i < runs.size(); i++) {
+                        const State state = runs[i].context->getState(State::Positions | State::Velocities);
+                        Clock::time_point start = Clock::now();
+                        runs[i].context->setState(state);
+                        runs[i].context->getState(State::Positions);
+                        setState[i].push_back(std::max(1e-9, secondsSince(start) - sync[i]));
+                    }
+                for (size_t i = 0; i < runs.size(); i++)
+                    if (!setState[i].empty() && runs[i].name.rfind("mrattle", 0) == 0)
+                        writeRatio(ratios, systemName, atoms, runs[i].name + " setState over verlet_settle (" +
+                                   std::to_string(1e3 * median(setState[i])) + " ms)", setState[i],
+                                   setState[verlet - names.begin()], false, 2);
                 // The targets: integration (bare) at most the pair's target times the other's
                 // time; ns/day with PME at least 0.95x the other's (time ratio at most 1/0.95).
                 for (const Compared& compared : Comparisons) {
                     const auto mine = std::find(names.begin(), names.end(), compared.name);
                     const auto other = std::find(names.begin(), names.end(), compared.against);
-                    if (mine == names.end() || other == names.end())
-                        continue;
-                    const vector<double>& a = runs[mine - names.begin()].secondsPerStep;
-                    const vector<double>& b = runs[other - names.begin()].secondsPerStep;
-                    const double ratio = median(a) / median(b), value = pme ? 1 / ratio : ratio;
-                    const string measure = compared.name + (pme ? " ns/day over " : " time per step over ") + compared.against;
-                    const bool met = pme ? value >= 0.95 : value <= compared.target;
-                    const PairedRatio paired = pairedRatio(a, b, pme);
-                    ratios << systemName << "," << atoms << "," << measure << "," << std::setprecision(3) << value
-                           << "," << (pme ? ">= 0.95" : "<= " + std::to_string(compared.target).substr(0, 3)) << ","
-                           << (met ? "yes" : "no") << "," << paired.ratio << "," << paired.low << "," << paired.high
-                           << std::endl;
+                    if (mine != names.end() && other != names.end())
+                        writeRatio(ratios, systemName, atoms, compared.name + (pme ? " ns/day over " : " time per step over ") +
+                                   compared.against, runs[mine - names.begin()].secondsPerStep,
+                                   runs[other - names.begin()].secondsPerStep, pme, pme ? 0.95 : compared.target);
                 }
             }
         }

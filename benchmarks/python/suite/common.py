@@ -45,12 +45,6 @@ def make_integrator(method, step_ps, tolerance=1e-10, bodies=None):
     raise ValueError("unknown method %r" % method)
 
 
-def intra_distances(positions, bodies):
-    """All intra-body pair distances, concatenated (for rigidity checks)."""
-    return np.concatenate([np.linalg.norm(positions[b][:, None] - positions[b], axis=2)[np.triu_indices(len(b), 1)]
-                           for b in bodies] or [np.zeros(0)])
-
-
 def nve_run(system, positions, velocities, method, step_ps, total_ps, sample_ps, platform_name="CPU",
             bodies=None, threads=1, tolerance=1e-10):
     """Run NVE and sample the energies (and rigidity): a dict of arrays, the wall time, the Context; a blow-up (a
@@ -81,7 +75,9 @@ def nve_run(system, positions, velocities, method, step_ps, total_ps, sample_ps,
         kinetic.append(ke)
         potential.append(pe)
         if bodies is not None:
-            d = intra_distances(state.getPositions(asNumpy=True).value_in_unit(unit.nanometer), bodies)
+            x = state.getPositions(asNumpy=True).value_in_unit(unit.nanometer)  # every intra-body distance
+            d = np.concatenate([np.linalg.norm(x[b][:, None] - x[b], axis=2)[np.triu_indices(len(b), 1)]
+                                for b in bodies] or [np.zeros(0)])
             if reference is None:
                 reference = d
             rigidity.append(float(np.max(np.abs(d - reference))) if d.size else 0.0)
