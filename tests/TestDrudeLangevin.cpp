@@ -253,7 +253,7 @@ TEST(DrudeLangevin, OnDevicesWithoutFrictionItFollowsReferenceAndAFailedStepIsUn
     // Double precision, both frictions 0 (deterministic) and a wall at 0.002 nm that the Drude
     // particles (0.004 nm at 300 K) reach often: 200 steps of 0.25 fs from the same state
     // follow Reference's bounces (without the wall Reference ends far from both). Then a Drude
-    // particle sent off at 20 nm/ps crosses twice the wall: the step is refused, and the
+    // particle sent off at 40 nm/ps (0.01 nm in a step, from at most 0.002 nm off its core) crosses twice the wall: the step is refused, and the
     // Context holds the state from before it.
     bool any = false;
     for (const string& name : devicePlatforms()) {
@@ -288,7 +288,7 @@ TEST(DrudeLangevin, OnDevicesWithoutFrictionItFollowsReferenceAndAFailedStepIsUn
         EXPECT_GT(maxDeviation(positions[0], positions[2]), 1e-4) << name;   // the wall acted
         EXPECT_LE(farthestDrude(d, positions[2]), wall * (1 + 1e-9)) << name;
         vector<Vec3> v = device->getState(State::Velocities).getVelocities();
-        v[d.pairs[0].first] += Vec3(20.0, 0, 0);
+        v[d.pairs[0].first] += Vec3(40.0, 0, 0);
         device->setVelocities(v);
         const State before = device->getState(State::Positions | State::Velocities);
         const string message = messageOf([&] { onDevice.step(1); });

@@ -262,7 +262,7 @@ TEST(DrudeNoseHoover, OnDevicesItFollowsReferenceAndAFailedStepLeavesBothChains)
     // Double precision, both chains coupled and a wall at 0.002 nm that the Drude particles
     // reach often: 200 steps of 0.25 fs from the same state follow Reference's, chains and
     // bounces (without the wall Reference ends far from both). Then a Drude particle sent off
-    // at 20 nm/ps crosses twice the wall: the step is refused, and positions, velocities and
+    // at 40 nm/ps (0.01 nm in a step, from at most 0.002 nm off its core) crosses twice the wall: the step is refused, and positions, velocities and
     // both chains are as before it.
     bool any = false;
     for (const string& name : devicePlatforms()) {
@@ -303,7 +303,7 @@ TEST(DrudeNoseHoover, OnDevicesItFollowsReferenceAndAFailedStepLeavesBothChains)
         EXPECT_GT(maxDeviation(positions[0], positions[2]), 1e-4) << name;   // the wall acted
         vector<Vec3> v = device->getState(State::Velocities).getVelocities();
         const int drude = d.pairs[0].first;
-        v[drude] += Vec3(20.0, 0, 0);
+        v[drude] += Vec3(40.0, 0, 0);
         device->setVelocities(v);
         const string before = stateXml(*device);
         const double bath = onDevice.computeHeatBathEnergy();
