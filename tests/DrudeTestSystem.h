@@ -1,9 +1,9 @@
 #ifndef MRATTLE_TEST_DRUDE_SYSTEM_H_
 #define MRATTLE_TEST_DRUDE_SYSTEM_H_
 
-// The Drude integrators' tests' systems (TestDrudeIntegrators.cpp, the fuzz harness):
-// rigid waters with a Drude particle on each oxygen and free polarizable ions. Only where the
-// build has OpenMM's Drude plugin.
+// The Drude integrators' tests' systems (TestDrudeIntegrators.cpp, TestDrudeManyGroups.cpp,
+// the fuzz harness): rigid waters with a Drude particle on each oxygen and free polarizable
+// ions. Only where the build has OpenMM's Drude plugin.
 #ifdef MRATTLE_HAVE_DRUDE
 
 #include "RigidBodyIntegrator.h"
