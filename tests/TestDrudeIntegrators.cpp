@@ -121,14 +121,6 @@ string kindName(const ::testing::TestParamInfo<string>& info) {
     return info.param;
 }
 
-/** A State with its integrator parameters (a thermostat's chains) as OpenMM's XML, to compare whole. */
-string stateXml(Context& context) {
-    const State state = context.getState(State::Positions | State::Velocities | State::IntegratorParameters);
-    std::stringstream xml;
-    XmlSerializer::serialize<State>(&state, "State", xml);
-    return xml.str();
-}
-
 /** The Drude integrators' kinds, without platforms: their settings (no Context). */
 class DrudeSettings : public ::testing::TestWithParam<string> {};
 
@@ -189,8 +181,9 @@ TEST_P(DrudeSettings, SettingsRoundTripThroughXml) {
     EXPECT_EQ(25.0, read.getDrudeCoupling());
     EXPECT_EQ(0.03, read.getMaxDrudeDistance());
     EXPECT_EQ(0.0015, readIntegrator.getStepSize());
-    if (read.langevin)
+    if (read.langevin) {
         EXPECT_EQ(17, read.langevin->getRandomNumberSeed());
+    }
     else {
         EXPECT_EQ(4, read.noseHoover->getChainLength());
         EXPECT_EQ(2, read.noseHoover->getNumMultiTimeSteps());
@@ -207,6 +200,14 @@ INSTANTIATE_TEST_SUITE_P(Drude, DrudeSettings, ::testing::Values(langevinKind, n
 using namespace MRattleTest::Drude;
 
 namespace {
+
+/** A State with its integrator parameters (a thermostat's chains) as OpenMM's XML, to compare whole. */
+string stateXml(Context& context) {
+    const State state = context.getState(State::Positions | State::Velocities | State::IntegratorParameters);
+    std::stringstream xml;
+    XmlSerializer::serialize<State>(&state, "State", xml);
+    return xml.str();
+}
 
 /** Every platform that runs the Drude integrators, times both. */
 class DrudeIntegrators : public ::testing::TestWithParam<Config> {
@@ -457,14 +458,16 @@ TEST_P(DrudeIntegrators, TheWallActsAsOnReferenceAndAFailedStepLeavesTheStateAsB
     const int steps = context->getState(0).getStepCount();
     const string message = messageOf([&] { onPlatform->step(1); });
     EXPECT_NE(string::npos, message.find("beyond twice the hard wall")) << message;
-    if (!isDevicePlatform(name))   // a device finds a failed step after it, without the particle
+    if (!isDevicePlatform(name)) {   // a device finds a failed step after it, without the particle
         EXPECT_NE(string::npos, message.find("Drude particle " + std::to_string(particle))) << message;
+    }
     EXPECT_NE(string::npos, message.find(drude.className())) << message;
     EXPECT_EQ(before, stateXml(*context));
     EXPECT_EQ(bath, drude.heatBathEnergy());
     EXPECT_EQ(steps, context->getState(0).getStepCount());
-    if (!langevin)
+    if (!langevin) {
         EXPECT_NE(0.0, bath);
+    }
 }
 
 TEST_P(DrudeIntegrators, LangevinsDrudeNoiseAloneKeepsMomentumAndAngularMomentum) {
