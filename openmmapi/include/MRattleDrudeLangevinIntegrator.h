@@ -85,6 +85,12 @@ public:
      * at getTemperature() (OpenMM 8's DrudeIntegrator::computeSystemTemperature).
      */
     double computeBodyTemperature();
+    /**
+     * RigidBodyIntegrator's draw at temperature, then each Drude particle's motion relative to
+     * its group (KE_C) scaled to getDrudeTemperature(), as OpenMM's Drude integrators draw it.
+     */
+    std::vector<OpenMM::Vec3> getVelocitiesForTemperature(const OpenMM::System& system, double temperature,
+                                                          int randomSeed) const override;
 
     /** The velocities are those of the middle of the step, as MRattleLangevinIntegrator's. */
     double getVelocityTimeOffset() const override {

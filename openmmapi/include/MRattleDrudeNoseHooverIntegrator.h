@@ -95,6 +95,12 @@ public:
      */
     double computeBodyTemperature();
     /**
+     * RigidBodyIntegrator's draw at temperature, then each Drude particle's motion relative to
+     * its group (KE_C) scaled to getDrudeTemperature(), as OpenMM's Drude integrators draw it.
+     */
+    std::vector<OpenMM::Vec3> getVelocitiesForTemperature(const OpenMM::System& system, double temperature,
+                                                          int randomSeed) const override;
+    /**
      * The energy of both heat baths, in kJ/mol: each chain's sum_j Q_j v_j^2 / 2 + N k_B T x_1
      * + k_B T sum_{j>1} x_j, with N = DOF - 3 n_drude and T the temperature for the bodies'
      * chain, N = 3 n_drude and T the Drude temperature for the Drude chain. Kinetic +

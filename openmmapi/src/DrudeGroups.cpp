@@ -128,6 +128,22 @@ void DrudeGroups::rigidPart(const Group& group, const vector<Vec3>& x, const vec
         out[i] = velocity + omega.cross(x[i] - center);
 }
 
+void DrudeGroups::scaleRelativeMotion(ContextImpl& context, const RigidBodyTopology& topology, const char* integratorName,
+                                      double factor, vector<Vec3>& v) {
+    const System& system = context.getSystem();
+    const DrudeGroups groups(system, topology, integratorName);
+    vector<Vec3> x, rigid(v.size());
+    context.getPositions(x);
+    vector<double> masses(system.getNumParticles());
+    for (int i = 0; i < system.getNumParticles(); i++)
+        masses[i] = system.getParticleMass(i);
+    for (const Group& group : groups.groups) {
+        rigidPart(group, x, v, masses, rigid);
+        for (int i : group.particles)
+            v[i] = rigid[i] + (v[i] - rigid[i]) * factor;
+    }
+}
+
 double DrudeGroups::relativeKineticEnergy(const vector<Vec3>& x, const vector<Vec3>& v,
                                           const vector<double>& masses) const {
     vector<Vec3> rigid(v.size());

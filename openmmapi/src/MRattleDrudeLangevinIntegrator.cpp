@@ -2,6 +2,7 @@
 #include "internal/DrudeGroups.h"
 #include "internal/RigidBodyKernels.h"
 #include "openmm/OpenMMException.h"
+#include <cmath>
 
 using namespace MRattlePlugin;
 using namespace OpenMM;
@@ -49,4 +50,11 @@ double MRattleDrudeLangevinIntegrator::computeDrudeTemperature() {
 double MRattleDrudeLangevinIntegrator::computeBodyTemperature() {
     return DrudeGroups::bodyTemperature(*context, getTopology(), getIntegratorName(), computeKineticEnergy(),
                                         getNumDegreesOfFreedom());
+}
+
+std::vector<Vec3> MRattleDrudeLangevinIntegrator::getVelocitiesForTemperature(const System& system, double temperature, int randomSeed) const {
+    std::vector<Vec3> velocities = RigidBodyIntegrator::getVelocitiesForTemperature(system, temperature, randomSeed);
+    DrudeGroups::scaleRelativeMotion(*context, getTopology(), getIntegratorName(),
+                                     temperature > 0 ? std::sqrt(drudeTemperature / temperature) : 0.0, velocities);
+    return velocities;
 }

@@ -3,6 +3,7 @@
 #include "internal/RigidBodyKernels.h"
 #include "internal/RigidBodyThermostats.h"
 #include "openmm/OpenMMException.h"
+#include <cmath>
 #include <string>
 
 using namespace MRattlePlugin;
@@ -62,4 +63,11 @@ double MRattleDrudeNoseHooverIntegrator::computeBodyTemperature() {
 
 double MRattleDrudeNoseHooverIntegrator::computeHeatBathEnergy() {
     return getStepKernel().computeHeatBathEnergy(*context, *this);
+}
+
+std::vector<Vec3> MRattleDrudeNoseHooverIntegrator::getVelocitiesForTemperature(const System& system, double temperature, int randomSeed) const {
+    std::vector<Vec3> velocities = RigidBodyIntegrator::getVelocitiesForTemperature(system, temperature, randomSeed);
+    DrudeGroups::scaleRelativeMotion(*context, getTopology(), getIntegratorName(),
+                                     temperature > 0 ? std::sqrt(drudeTemperature / temperature) : 0.0, velocities);
+    return velocities;
 }

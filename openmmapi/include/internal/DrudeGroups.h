@@ -74,6 +74,12 @@ public:
     static double drudeTemperature(OpenMM::ContextImpl& context, const RigidBodyTopology& topology,
                                    const char* integratorName);
     /**
+     * Scales the relative part (v - v_R) of every group's velocities v, set for a Context's
+     * positions, by factor: the Drude particles' relative motion drawn at a temperature of its own.
+     */
+    static void scaleRelativeMotion(OpenMM::ContextImpl& context, const RigidBodyTopology& topology,
+                                    const char* integratorName, double factor, std::vector<OpenMM::Vec3>& v);
+    /**
      * The bodies' and free particles' temperature 2 (KE - KE_C) / ((dof - 3 n_drude) k_B) of a
      * Context, in K (0 without such degrees of freedom), given its kinetic energy KE and dof
      * degrees of freedom in all: what computeBodyTemperature() returns.
