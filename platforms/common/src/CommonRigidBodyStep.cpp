@@ -322,6 +322,8 @@ void CommonRigidBodyState::launchPass(const Pass& pass) {
     const unsigned int randomIndex =
         pass.noiseScale != 0 ? cc.getIntegrationUtilities().prepareRandomNumbers(cc.getPaddedNumAtoms()) : 0;
     for (ComputeKernel* kernel : {&advanceGroups, &advanceLargeBodies}) {
+        if (kernel == &advanceLargeBodies && numLargeBodies == 0)
+            break;  // setting arguments costs the host time on small systems
         (*kernel)->setArg(advanceBackupIndex, backupStepIndex);
         setMixedArg(*kernel, advanceKickTime, pass.kickTime);
         (*kernel)->setArg(advanceProjectAfterKick, pass.projectAfterKick ? 1 : 0);
