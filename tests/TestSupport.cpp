@@ -159,7 +159,7 @@ const std::vector<IntegratorTraits>& integrators() {
              langevin->setRandomNumberSeed(2024);
              return langevin;
          }),
-         [](RigidBodyIntegrator& integrator) { dynamic_cast<MRattleLangevinIntegrator&>(integrator).setFriction(0); },
+         [](RigidBodyIntegrator& integrator) { dynamic_cast<MRattleLangevinIntegrator&>(integrator).setTemperature(0); },
          nullptr, true},
         {"RigidSplitting", true, false, false, false, false,
          maker<RigidSplittingIntegrator>([](auto make, double h) { return make(h); })},
@@ -189,8 +189,8 @@ const std::vector<IntegratorTraits>& integrators() {
          }),
          [](RigidBodyIntegrator& integrator) {
              auto& drude = dynamic_cast<MRattleDrudeLangevinIntegrator&>(integrator);
-             drude.setFriction(0);
-             drude.setDrudeFriction(0);
+             drude.setTemperature(0);
+             drude.setDrudeTemperature(0);
          },
          nullptr, true},
         // Without a DrudeForce its Drude chain rests and it is MRattleNoseHoover with the body

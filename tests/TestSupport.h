@@ -63,7 +63,10 @@ struct IntegratorTraits {
      * same noise); written as maker<Class>(...), which also makes the checkpoint-counting one.
      */
     IntegratorMaker make;
-    /** A stochastic one's noise turned off (device and host draw different numbers: what is left must agree); else none. */
+    /**
+     * A stochastic one's noise turned off (device and host draw different numbers: what is left
+     * must agree): Langevin at 0 K, its friction kept; CSVR uncoupled; else none.
+     */
     std::function<void(MRattlePlugin::RigidBodyIntegrator&)> removeNoise;
     /**
      * A thermostat with variables a State carries in its integrator parameters: the energy of

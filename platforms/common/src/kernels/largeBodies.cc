@@ -142,7 +142,9 @@ KERNEL void projectLargeBodies(BODY_ARGUMENTS, int onlyIfNotRigid, GLOBAL const 
         const bool moves = !failed && isLargeBody(start, end, shape);
         const BodySums sums = gatherLargeBody(scratch, moves, start, end, bodyAtoms, posq, posqCorrection, velm, false,
                                               velm, zeroMatrix());
-        const RigidMotion motion = rigidMotionOf(sums, start, end, bodyAtoms, shape, posq, posqCorrection);
+        RigidMotion motion;
+        if (moves)
+            motion = rigidMotionOf(sums, start, end, bodyAtoms, shape, posq, posqCorrection);
         mixed residual = 0, scale = 0;
         if (moves && onlyIfNotRigid)
             rigidResidual(motion, start + LOCAL_ID, end, LOCAL_SIZE, bodyAtoms, posq, posqCorrection, velm, &residual,
