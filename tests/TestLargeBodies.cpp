@@ -203,6 +203,9 @@ TEST_P(LargeBodies, AFailedStepPutsEveryAtomBackAtItsStart) {
 TEST_P(LargeBodies, AStepTooLargeForALargeBodysRotationIsUndone) {
     // The first large body spun about z so fast that a 20 fs step turns it by about pi (no
     // reset rotation exists): its own work group records the failure, and the step is undone.
+    // Skipped for the velocity-scaling thermostats: their chain or CSVR draw meets the spin's
+    // kinetic energy first and fails the step itself (undone too: TestThermostats, AFailedStepLeavesTheThermostatAsItWas),
+    // so the large body's own failure, which this test is about, is never reached.
     if (GetParam().traits().rescalesVelocities)
         GTEST_SKIP() << "a thermostat's chain refuses this spin's kinetic energy before the reset (also undone)";
     const LargeBodySystem s = largeBodySystem();
