@@ -249,6 +249,58 @@ TEST_P(DevicePlatform, CheckpointRestartIsBitForBit) {
     }
 }
 
+TEST_P(DevicePlatform, PositionsSetAgainAreCheckedOnTheDeviceAgainstEachBodysShape) {
+    // 64 waters, 63 constrained to their geometry and the first rigid by declaration alone.
+    // A saved State set again fits every body's reference turned (kernels/fitReference.cc:
+    // no download); positions that do not fit are classified on the host as at the first
+    // set: an off-geometry water is put back on its constraints, a new shape is kept, NaN refused.
+    Cluster c = waterBox(NonbondedForce::NoCutoff);
+    const State start = rigidStart(c);
+    for (size_t m = 1; m < c.molecules.size(); m++)
+        for (int a = 0; a < 3; a++)
+            for (int b = a + 1; b < 3; b++) {
+                const Vec3 d = start.getPositions()[c.molecules[m][a]] - start.getPositions()[c.molecules[m][b]];
+                c.system->addConstraint(c.molecules[m][a], c.molecules[m][b], std::sqrt(d.dot(d)));
+            }
+    const vector<vector<int> > constrained(c.molecules.begin() + 1, c.molecules.end()), declared(1, c.molecules[0]);
+    for (const string precision : {"single", "mixed", "double"}) {
+        const double roundoff = (precision == "double" ? 1e-12 : 1e-5);
+        // OpenMM's host constraint code puts a water back on its geometry to about 5e-8 of it.
+        const double onGeometry = std::max(roundoff, 1e-8);
+        // OpenMM 7.7 stores positions set from the host as floats in mixed precision too.
+        const double stored = (precision == "mixed" ? 1e-6 : 0.0);
+        MRattleIntegrator integrator(0.002);
+        std::unique_ptr<Context> context = deviceContext(GetParam(), *c.system, integrator, precision);
+        context->setState(start);
+        integrator.step(20);
+        const State saved = context->getState(State::Positions | State::Velocities);
+        integrator.step(20);
+        const vector<Vec3> after40 = context->getState(State::Positions).getPositions();
+        context->setState(saved);
+        EXPECT_LE(maxDeviation(saved.getPositions(), context->getState(State::Positions).getPositions()), stored) << precision;
+        integrator.step(20);
+        vector<Vec3> moved = context->getState(State::Positions).getPositions();
+        EXPECT_LT(maxDeviation(after40, moved), roundoff) << precision;
+        // An H of a constrained water 1e-3 nm off, the declared water 1% larger.
+        moved[c.molecules[1][1]] += Vec3(1e-3, 0, 0);
+        const Vec3 center = moved[c.molecules[0][0]];
+        for (int atom : c.molecules[0])
+            moved[atom] = center + (moved[atom] - center) * 1.01;
+        context->setPositions(moved);
+        EXPECT_LT(maxDistanceChange(start.getPositions(), context->getState(State::Positions).getPositions(), constrained),
+                  onGeometry) << precision;
+        integrator.step(20);
+        const vector<Vec3> stepped = context->getState(State::Positions).getPositions();
+        EXPECT_LT(maxDistanceChange(moved, stepped, declared), roundoff) << precision;
+        EXPECT_GT(maxDistanceChange(start.getPositions(), stepped, declared), 5e-4) << precision;
+        EXPECT_LT(maxDistanceChange(start.getPositions(), stepped, constrained), onGeometry) << precision;
+        moved[c.molecules[5][2]][1] = std::nan("");
+        const string nanAtom = std::to_string(c.molecules[5][2]);
+        EXPECT_NE(string::npos, messageOf([&]() { context->setPositions(moved); })
+                                    .find("the position of particle " + nanAtom + " is not finite")) << precision;
+    }
+}
+
 TEST_P(DevicePlatform, FreeConstrainedParticlesBesideBodies) {
     // 27 tetrahedral molecules: 14 declared rigid, the other 13 free with their four bonds
     // to the centre constrained (RATTLE clusters on the device) and no other constraint.

@@ -229,11 +229,22 @@ private:
     }
     /** The bodies' reference geometry and identity orientations from these positions (made exact in place). */
     void setReference(std::vector<OpenMM::Vec3>& positions);
+    /** Each body's three atoms from which fitsReference() turns its reference (bodyFrame). */
+    void chooseFrames(const std::vector<OpenMM::Vec3>& positions);
+    /**
+     * Whether the positions on the device are every body's reference geometry turned (the
+     * bodies' orientations then set to those turns): no download, one 4-byte read.
+     */
+    bool fitsReference(OpenMM::ContextImpl& context);
     /** projectVelocities' check on the host, for velocities the device's screen found unusable. */
     void projectVelocitiesOnHost(OpenMM::ContextImpl& context, double tolerance);
     std::vector<double> identityOrientations() const;
     void uploadIdentityOrientations();
+    /** How far a stored coordinate of these positions may be from what was set (storage round-off). */
     double storageError(OpenMM::ContextImpl& context, const std::vector<OpenMM::Vec3>& positions) const;
+    /** A stored coordinate's relative round-off, and the longest box vector (by which OpenMM may shift one). */
+    double coordinateRoundoff() const;
+    static double largestBoxVector(OpenMM::ContextImpl& context);
     bool doubleMixed() const {
         return cc.getUseDoublePrecision() || cc.getUseMixedPrecision();
     }
@@ -275,6 +286,8 @@ private:
     bool forcesComputed = false;  // the step under way has had its computeForces phase
     /** Set by a checkpoint's load: the positions OpenMM reads next come with the reference geometry it held. */
     bool keepReference = false;
+    /** Whether bodyReference and bodyFrame hold what the host last classified (fitsReference() can check positions). */
+    bool referenceOnDevice = false;
     /** Set while updateShapes() writes corrected positions (the Context notifies the integrator again). */
     bool writingCorrectedShapes = false;
     Pass pending;
@@ -299,6 +312,11 @@ private:
     OpenMM::ComputeArray velocityScale;
     /** sumKineticEnergy's partial sums (2 per work group) and their count. */
     OpenMM::ComputeArray partials, partialCount;
+    /** Each body's three atoms (offsets) from which fitBodies turns its reference, and its verdict. */
+    OpenMM::ComputeArray bodyFrame, misfitBodies;
+    std::vector<OpenMM::mm_int4> hostFrames;
+    OpenMM::ComputeKernel fitBodies;
+    int fitRoundoff = 0;
     /** findUnusableVelocities' verdict: 1 if a velocity is not finite. */
     OpenMM::ComputeArray unusableVelocities;
     /** The bodies' kinetic energies (3 per body), computeKineticEnergies' program compiled at its first call. */

@@ -17,17 +17,23 @@ using namespace OpenMM;
 using std::vector;
 
 double CommonRigidBodyState::storageError(ContextImpl& context, const vector<Vec3>& positions) const {
-    // Relative round-off of a stored coordinate: double, or float (mixed precision too: OpenMM
-    // 7.7 stores positions set from the host without their float correction).
-    const double roundoff = cc.getUseDoublePrecision() ? std::ldexp(1.0, -53) : std::ldexp(1.0, -24);
-    // OpenMM stores coordinates shifted into the periodic box: up to a box length more.
-    Vec3 a, b, c;
-    context.getPeriodicBoxVectors(a, b, c);
-    double largest = std::sqrt(std::max(a.dot(a), std::max(b.dot(b), c.dot(c))));
     double coordinate = 0;
     for (const Vec3& x : positions)
         coordinate = std::max(coordinate, std::max(std::fabs(x[0]), std::max(std::fabs(x[1]), std::fabs(x[2]))));
-    return roundoff * (coordinate + largest);
+    return coordinateRoundoff() * (coordinate + largestBoxVector(context));
+}
+
+double CommonRigidBodyState::coordinateRoundoff() const {
+    // Double, or float (mixed precision too: OpenMM 7.7 stores positions set from the host
+    // without their float correction).
+    return cc.getUseDoublePrecision() ? std::ldexp(1.0, -53) : std::ldexp(1.0, -24);
+}
+
+double CommonRigidBodyState::largestBoxVector(ContextImpl& context) {
+    // OpenMM stores coordinates shifted into the periodic box: up to a box length more.
+    Vec3 a, b, c;
+    context.getPeriodicBoxVectors(a, b, c);
+    return std::sqrt(std::max(a.dot(a), std::max(b.dot(b), c.dot(c))));
 }
 
 void CommonRigidBodyState::updateShapes(ContextImpl& context) {
@@ -35,6 +41,9 @@ void CommonRigidBodyState::updateShapes(ContextImpl& context) {
         return;  // the positions this call itself is writing: classified below, once written
     ContextSelector selector(cc);
     rememberOrder();  // setting positions clears OpenMM's cell offsets
+    // Bodies that are their reference turned (a State's positions) keep it: nothing to classify.
+    if (!keepReference && fitsReference(context))
+        return;
     // Host buffers are members: at 100k atoms fresh ones cost more in page faults than the work.
     vector<Vec3>& positions = hostPositions;
     context.getPositions(positions);
@@ -54,8 +63,8 @@ void CommonRigidBodyState::updateShapes(ContextImpl& context) {
     }
     if (keepReference)
         keepReference = false;  // a checkpoint's positions: its reference came with them
-    else if (rebuildsShapes())
-        setReference(positions);
+    else
+        setReference(positions);  // in double precision only what fitsReference() compares with
     // The device's codes change only when a body's shape does.
     bool changed = false;
     for (int b = 0; b < numBodies; b++) {
@@ -98,6 +107,66 @@ void CommonRigidBodyState::setReference(vector<Vec3>& exact) {
     else
         bodyReference.upload(referenceSingle);
     uploadIdentityOrientations();
+    chooseFrames(exact);
+}
+
+void CommonRigidBodyState::chooseFrames(const vector<Vec3>& exact) {
+    // Well-spread atoms, so the turn is no less exact than the coordinates: i furthest from
+    // the first atom, j furthest from i, k furthest from their line (none for a linear body).
+    hostFrames.assign(std::max(1, numBodies), mm_int4(0, 0, 0, 0));
+    for (int b = 0; b < numBodies; b++) {
+        const vector<int>& atoms = bodies.getBodyParticles(b);
+        if (atoms.size() < 2)
+            continue;
+        auto furthest = [&](auto distance) {
+            int best = 0;
+            for (int k = 1; k < (int) atoms.size(); k++)
+                if (distance(exact[atoms[k]]) > distance(exact[atoms[best]]))
+                    best = k;
+            return best;
+        };
+        const int i = furthest([&](const Vec3& x) { return (x - exact[atoms[0]]).dot(x - exact[atoms[0]]); });
+        const Vec3 xi = exact[atoms[i]];
+        const int j = furthest([&](const Vec3& x) { return (x - xi).dot(x - xi); });
+        const Vec3 line = exact[atoms[j]] - xi;
+        auto offLine = [&](const Vec3& x) { return (x - xi).cross(line).dot((x - xi).cross(line)); };
+        const int k = furthest(offLine);
+        const bool linear = shapes[b] == RigidBodyMath::Shape::Linear;
+        if (i != j && (linear || offLine(exact[atoms[k]]) > 0))
+            hostFrames[b] = mm_int4(i, j, linear ? -1 : k, 1);
+    }
+    bodyFrame.upload(hostFrames);
+    referenceOnDevice = true;
+}
+
+bool CommonRigidBodyState::fitsReference(ContextImpl& context) {
+    if (!referenceOnDevice || numBodies == 0)
+        return false;
+    if (!fitBodies) {
+        fitBodies = stepProgram->createKernel("fitBodiesToReference");
+        Arguments arguments(fitBodies, doubleMixed());
+        arguments.add(numBodies);
+        arguments.add(bodyStart);
+        arguments.add(bodyAtoms);
+        arguments.add(bodyShape);
+        arguments.add(bodyFrame);
+        arguments.add(bodyReference);
+        arguments.add(bodyOrientation);
+        arguments.add(cc.getPosq());
+        arguments.add(cc.getUseMixedPrecision() ? cc.getPosqCorrection() : cc.getPosq());
+        fitRoundoff = arguments.addMixed(0.0);
+        arguments.addMixed(0.0);
+        arguments.add(misfitBodies);
+    }
+    setMixedArg(fitBodies, fitRoundoff, coordinateRoundoff());
+    setMixedArg(fitBodies, fitRoundoff + 1, largestBoxVector(context));
+    fitBodies->execute(numBodies);
+    int misfit;
+    misfitBodies.download(&misfit);
+    if (misfit == 0)
+        return true;
+    misfitBodies.upload(vector<int>(1, 0));
+    return false;
 }
 
 vector<double> CommonRigidBodyState::identityOrientations() const {

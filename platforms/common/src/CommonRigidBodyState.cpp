@@ -167,6 +167,9 @@ void CommonRigidBodyState::initialize(const System& system, const RigidBodyTopol
                              doubleMixed() ? sizeof(mm_double4) : sizeof(mm_float4), "mrattleBodyReference");
     bodyReference.upload(vector<mm_double4>(bodyReference.getSize(), mm_double4(0, 0, 0, 0)), true);
     initializeMixedArray(bodyOrientation, identityOrientations(), "mrattleBodyOrientation");
+    bodyFrame.initialize<mm_int4>(cc, std::max(1, numBodies), "mrattleBodyFrame");
+    misfitBodies.initialize<int>(cc, 1, "mrattleMisfitBodies");
+    misfitBodies.upload(vector<int>(1, 0));
     // The factors of the next scaling: every velocity's (and the Drude groups' R), and the Drude groups' C.
     initializeMixedArray(velocityScale, {1.0, 1.0}, "mrattleVelocityScale");
     // A launch has at most getNumThreadBlocks() work groups (OpenMM's rule, both platforms).

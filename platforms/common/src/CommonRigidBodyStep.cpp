@@ -28,6 +28,11 @@ const double DeviceFiniteBound = 1e30;
  * reference (something else moved it): far above float's round-off, far below a step's motion.
  */
 const double StaleReference = 1e-4;
+/**
+ * Positions set from the host fit a body's reference geometry if no atom is further from it
+ * turned than this many times the round-off of the body's stored coordinates (plus a box).
+ */
+const double FitTolerance = 4;
 
 /** A constant as the device code reads it: in the integration arithmetic's precision. */
 std::string mixedConstant(double value) {
@@ -59,6 +64,7 @@ std::map<std::string, std::string> CommonRigidBodyState::programDefines(bool use
     defines["COLLISION_THRESHOLD"] = mixedConstant(RigidBodyMath::CollisionThreshold);
     defines["FINITE_BOUND"] = mixedConstant(DeviceFiniteBound);
     defines["STALE_REFERENCE"] = mixedConstant(StaleReference);
+    defines["FIT_TOLERANCE"] = mixedConstant(FitTolerance);
     defines["LARGEST_SPEED"] = mixedConstant(LargestSpeed);
     defines["REDUCTION_THREADS"] = std::to_string(ReductionThreads);
     defines["LARGE_BODY_ATOMS"] = std::to_string(LargeBodyAtoms);
@@ -73,7 +79,7 @@ std::string CommonRigidBodyState::programSource(const std::string& sources) {
     return CommonMRattleKernelSources::bodyMath + CommonMRattleKernelSources::rotation + CommonMRattleKernelSources::step +
            CommonMRattleKernelSources::freeConstraints + CommonMRattleKernelSources::projection +
            CommonMRattleKernelSources::advance + CommonMRattleKernelSources::largeBodies +
-           CommonMRattleKernelSources::reduction + sources;
+           CommonMRattleKernelSources::reduction + CommonMRattleKernelSources::fitReference + sources;
 }
 
 CommonRigidBodyState::Arguments CommonRigidBodyState::arguments(ComputeKernel& kernel) {
