@@ -406,8 +406,8 @@ TEST_P(DrudeIntegrators, TheWallActsAsOnReferenceAndAFailedStepLeavesTheStateAsB
     // On a device platform (double precision): 200 steps from the same state follow Reference's
     // bounces (and chains), and without the wall Reference ends far from both. Then on every
     // platform a Drude particle sent off at 40 nm/ps (0.01 nm in a step, from at most 0.002 nm
-    // off its core) crosses twice the wall: the step is refused (on a host platform naming the
-    // particle), and positions, velocities, both chains and the step count are as before it.
+    // off its core) crosses twice the wall: the step is refused naming the particle and its
+    // core, and positions, velocities, both chains and the step count are as before it.
     const string& name = GetParam().platform;
     const bool langevin = isLangevin(GetParam().integrator);
     DrudeSystem d = drudeWaters(2, 1, 0.4);
@@ -458,9 +458,10 @@ TEST_P(DrudeIntegrators, TheWallActsAsOnReferenceAndAFailedStepLeavesTheStateAsB
     const int steps = context->getState(0).getStepCount();
     const string message = messageOf([&] { onPlatform->step(1); });
     EXPECT_NE(string::npos, message.find("beyond twice the hard wall")) << message;
-    if (!isDevicePlatform(name)) {   // a device finds a failed step after it, without the particle
-        EXPECT_NE(string::npos, message.find("Drude particle " + std::to_string(particle))) << message;
-    }
+    // Every platform names the particle and its core by System index (a device: the pair its
+    // failing work item recorded, read once the failure is found).
+    EXPECT_NE(string::npos, message.find("Drude particle " + std::to_string(particle) + " ")) << message;
+    EXPECT_NE(string::npos, message.find("its core " + std::to_string(d.pairs[0].second))) << message;
     EXPECT_NE(string::npos, message.find(drude.className())) << message;
     EXPECT_EQ(before, stateXml(*context));
     EXPECT_EQ(bath, drude.heatBathEnergy());
