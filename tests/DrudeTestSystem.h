@@ -30,7 +30,8 @@ using std::vector;
 /**
  * SWM4-NDP-like water without its M site (its charge on the oxygen core): rigid O-H-H
  * bodies, each with a Drude particle on the oxygen; plus free polarizable ions (a core and
- * its Drude particle). Vacuum, no cutoff; all pairs inside a molecule or pair excluded.
+ * its Drude particle). Vacuum, no cutoff (or periodic: drudeWaters); all pairs inside a
+ * molecule or pair excluded.
  *
  * Each Drude particle is repelled by the other waters' hydrogens (an LJ exception, sigma 0.2
  * nm, epsilon 2 kJ/mol, their Coulomb kept): neither has LJ of its own, and without it a
@@ -45,9 +46,24 @@ struct DrudeSystem {
     vector<std::pair<int, int> > pairs;            // (Drude, core)
 };
 
-inline DrudeSystem drudeWaters(int numWaters, int numIons, double spacing) {
+/**
+ * With cutoff > 0 (below 1.5 spacing): periodic, in a cube of 3 spacings (the lattice's
+ * period), NonbondedForce::CutoffPeriodic at that cutoff, and the Drude particles' repulsion
+ * from other molecules' hydrogens an LJ of both of their own (sigma 0.2 nm, epsilon 2 kJ/mol,
+ * which the combination rule gives their pairs) instead of exceptions, which would join all
+ * the molecules into one for OpenMM: each water and each ion is then a molecule of its own,
+ * which a device platform's reordering may move.
+ */
+inline DrudeSystem drudeWaters(int numWaters, int numIons, double spacing, double cutoff = 0) {
     DrudeSystem d;
     NonbondedForce* nonbonded = new NonbondedForce();
+    const bool periodic = cutoff > 0;
+    const double sigmaRepelled = periodic ? 0.2 : 1.0, epsilonRepelled = periodic ? 2.0 : 0.0;
+    if (periodic) {
+        nonbonded->setNonbondedMethod(NonbondedForce::CutoffPeriodic);
+        nonbonded->setCutoffDistance(cutoff);
+        d.system.setDefaultPeriodicBoxVectors(Vec3(3 * spacing, 0, 0), Vec3(0, 3 * spacing, 0), Vec3(0, 0, 3 * spacing));
+    }
     DrudeForce* drude = new DrudeForce();
     d.system.addForce(nonbonded);
     d.system.addForce(drude);
@@ -65,9 +81,9 @@ inline DrudeSystem drudeWaters(int numWaters, int numIons, double spacing) {
         d.system.addParticle(1.008);
         d.system.addParticle(0.4);        // the Drude particle
         nonbonded->addParticle(-1.11466 + 1.71636, 0.318395, 0.882573);
-        nonbonded->addParticle(0.55733, 1.0, 0.0);
-        nonbonded->addParticle(0.55733, 1.0, 0.0);
-        nonbonded->addParticle(qDrude, 1.0, 0.0);
+        nonbonded->addParticle(0.55733, sigmaRepelled, epsilonRepelled);
+        nonbonded->addParticle(0.55733, sigmaRepelled, epsilonRepelled);
+        nonbonded->addParticle(qDrude, sigmaRepelled, epsilonRepelled);
         // Geometry: O-H 0.09572 nm, H-O-H 104.52 degrees, turned by w.
         const double half = 0.5 * 104.52 * M_PI / 180, turn = 0.7 * w;
         const Vec3 h1(0.09572 * std::sin(half), 0.09572 * std::cos(half), 0);
@@ -90,13 +106,15 @@ inline DrudeSystem drudeWaters(int numWaters, int numIons, double spacing) {
         const Vec3 x = site(placed++);
         const int core = d.system.addParticle(35.0), particle = d.system.addParticle(0.4);
         nonbonded->addParticle(1.2, 0.40, 0.5);
-        nonbonded->addParticle(-1.2, 1.0, 0.0);
+        nonbonded->addParticle(-1.2, sigmaRepelled, epsilonRepelled);
         nonbonded->addException(core, particle, 0.0, 1.0, 0.0);
         d.positions.push_back(x);
         d.positions.push_back(x + Vec3(-0.0008, 0.0006, 0.0004));
         drude->addParticle(particle, core, -1, -1, -1, -1.2, 0.002, 1.0, 1.0);
         d.pairs.push_back({particle, core});
     }
+    if (periodic)
+        return d;
     for (const auto& pair : d.pairs)
         for (const vector<int>& body : d.bodies)
             if (std::find(body.begin(), body.end(), pair.second) == body.end())

@@ -7,7 +7,8 @@
  * a DrudeForce added to the System (or given more pairs) after the Context was created makes
  * the next step fail naming the integrator, with positions and velocities as they were, until
  * Context::reinitialize(); the bodies' and the Drude particles' temperatures reach their two
- * targets within their statistical errors and a checkpoint continues bit for bit (both chains
+ * targets within their statistical errors (the Drude one also within 2%, the test system's
+ * steady-state excess) and a checkpoint continues bit for bit (both chains
  * with it); a Drude particle beyond twice the hard wall fails the step, which leaves the State
  * (and both chains) as before it, and on a device platform (double precision) the walled step
  * follows Reference's first; Langevin: its Drude noise alone keeps momentum and angular
@@ -19,7 +20,9 @@
  * particles); a Drude particle in a body and a massless core are refused with a message;
  * Langevin: the hard wall holds the Drude particles and a hot Drude particle crossing twice it
  * fails the step. Without OpenMM's Drude plugin too (DrudeSettings): bad settings are refused
- * with a message and the settings round-trip through XML.
+ * with a message and the settings round-trip through XML. On each device platform
+ * (DrudeReordering): a periodic system with a cutoff, whose atoms the device reorders, follows
+ * Reference through the reorderings.
  */
 #include "DrudeTestSystem.h"
 #include "TestSupport.h"
@@ -377,7 +380,24 @@ TEST_P(DrudeIntegrators, TemperaturesReachTheirTargetsAndACheckpointContinuesBit
               << bodyMean.second << " K (target " << temperature << "), Drude temperature " << drudeMean.first
               << " +- " << drudeMean.second << " K (target " << drudeTemperature << ")" << std::endl;
     EXPECT_NEAR(temperature, bodyMean.first, 3 * bodyMean.second);
-    EXPECT_NEAR(drudeTemperature, drudeMean.first, 3 * drudeMean.second);
+    // The Drude temperature within 3 standard errors and 2% of its target: with its Drude
+    // particles at 50 K among motion at 300 K this system's Drude temperature sits above 50 K in
+    // the steady state (2026-12-03, Reference, runs of this length, Langevin 5/ps and 20/ps,
+    // mean +- standard error over seeds): MRattleDrudeLangevin 50.39 +- 0.09 K (24 seeds; 50.45
+    // and 50.59 at 0.5 and 0.25 fs, 50.38 at a Drude friction of 80/ps), and OpenMM's
+    // DrudeLangevinIntegrator (waters SETTLEd, its pair temperature) 50.44 +- 0.11 K at 0.1 fs
+    // (at 1 fs its half-step velocities read 66 K). The excess is this system's interactions':
+    // both integrators read about 0.3 K more with its NonbondedForce than without it
+    // (MRattleDrudeLangevin at 1 fs 0.31 +- 0.16 K, 50.08 K without; OpenMM at 0.25 fs, from its
+    // half-step and its centred velocities, 0.29 and 0.27 +- 0.18 K). Both read their target when the two
+    // temperatures are equal (300 K: 299.5 +- 0.4 and 299.4 +- 0.9 K), and real SWM4-NDP reads
+    // 50.03 +- 0.11 K. The excess, about one standard error of a run, made 3 of them fail about
+    // 1 seed in 65 (instead of 1 in 370). OpenMM's own test allows 1% (one pair's internal
+    // temperature) and 3% (SWM4-NDP water's): plugins/drude/tests/TestDrudeLangevinIntegrator.h,
+    // OpenMM 7.7.0, lines 93 and 171. Not yet explained: OpenMM's excess falls with a larger
+    // Drude friction (50.19 +- 0.07 K at 80/ps, 0.1 fs), as heat flowing in from the 300 K motion
+    // would, while this plugin's stays (50.38 +- 0.05 K at 80/ps).
+    EXPECT_NEAR(drudeTemperature, drudeMean.first, 3 * drudeMean.second + 0.02 * drudeTemperature);
     // Errors small enough for the check to mean something (a few per cent).
     EXPECT_LT(bodyMean.second, 0.03 * temperature);
     EXPECT_LT(drudeMean.second, 0.03 * drudeTemperature);
@@ -406,8 +426,8 @@ TEST_P(DrudeIntegrators, TheWallActsAsOnReferenceAndAFailedStepLeavesTheStateAsB
     // On a device platform (double precision): 200 steps from the same state follow Reference's
     // bounces (and chains), and without the wall Reference ends far from both. Then on every
     // platform a Drude particle sent off at 40 nm/ps (0.01 nm in a step, from at most 0.002 nm
-    // off its core) crosses twice the wall: the step is refused (on a host platform naming the
-    // particle), and positions, velocities, both chains and the step count are as before it.
+    // off its core) crosses twice the wall: the step is refused naming the particle and its
+    // core, and positions, velocities, both chains and the step count are as before it.
     const string& name = GetParam().platform;
     const bool langevin = isLangevin(GetParam().integrator);
     DrudeSystem d = drudeWaters(2, 1, 0.4);
@@ -458,9 +478,10 @@ TEST_P(DrudeIntegrators, TheWallActsAsOnReferenceAndAFailedStepLeavesTheStateAsB
     const int steps = context->getState(0).getStepCount();
     const string message = messageOf([&] { onPlatform->step(1); });
     EXPECT_NE(string::npos, message.find("beyond twice the hard wall")) << message;
-    if (!isDevicePlatform(name)) {   // a device finds a failed step after it, without the particle
-        EXPECT_NE(string::npos, message.find("Drude particle " + std::to_string(particle))) << message;
-    }
+    // Every platform names the particle and its core by System index (a device: the pair its
+    // failing work item recorded, read once the failure is found).
+    EXPECT_NE(string::npos, message.find("Drude particle " + std::to_string(particle) + " ")) << message;
+    EXPECT_NE(string::npos, message.find("its core " + std::to_string(d.pairs[0].second))) << message;
     EXPECT_NE(string::npos, message.find(drude.className())) << message;
     EXPECT_EQ(before, stateXml(*context));
     EXPECT_EQ(bath, drude.heatBathEnergy());
@@ -690,6 +711,67 @@ TEST_P(DrudeOnReference, LangevinsHotDrudeParticleBeyondTwiceTheWallFailsTheStep
     EXPECT_EQ(before.getStepCount(), after.getStepCount());
     for (size_t i = 0; i < d.positions.size(); i++)
         EXPECT_EQ(before.getPositions()[i][0], after.getPositions()[i][0]) << "particle " << i;
+}
+
+TEST(DrudeReordering, DrudeGroupsFollowTheDevicesReorderingsAsOnReference) {
+    // A device platform reorders atoms when a nonbonded force has a cutoff (OpenMM 7.7: at the
+    // end of the first step, then every 250 steps; whole identical molecules, sorted by position
+    // and wrapped into the box), and CommonRigidBodyState::mapAtoms then uploads the Drude
+    // groups' and pairs' device indices anew. 22 waters and 5 ions filling a periodic lattice
+    // (0.4 nm, cutoff 0.55 nm; OpenMM's zigzag order is not the lattice's: through pocl about
+    // 95 of the 108 atoms leave their System index, before the first step and at step 251),
+    // Nose-Hoover with both chains coupled (deterministic; its Drude kernels read the groups,
+    // the wall the pairs) and a wall that acts: 260 steps of 0.25 fs from the same state on
+    // each device platform in double precision end close to Reference (2e-8 nm through pocl),
+    // the Drude particles within the wall and the bodies rigid. One device Context a platform.
+    //
+    // What this can and cannot catch: OpenMM moves only whole identical molecules (its
+    // molecules join the bodies, CommonRigidBodyState's BodyForceInfo, and each Drude pair),
+    // and a Drude group keeps nothing of its own on the device, so Drude lists left in the old
+    // order only relabel the groups: skipping the upload of drudePairAtoms (or of every Drude
+    // list) at a reordering passes, bit for bit. A list that pairs a group with another's
+    // Drude pairs (drudePairAtoms rotated by one pair at each reordering) fails: 0.04 nm from
+    // Reference and bodies off by 1e-4 nm.
+    const double wall = 0.003, cutoff = 0.55;
+    const int steps = 260;
+    DrudeSystem d = drudeWaters(22, 5, 0.4, cutoff);
+    auto make = [&](double maxDistance) {
+        std::unique_ptr<RigidBodyIntegrator> integrator =
+            DrudeView::make(noseHooverKind, 300, 10.0, 50, 20.0, 0.00025);
+        DrudeView(*integrator).setMaxDrudeDistance(maxDistance);
+        return integrator;
+    };
+    std::unique_ptr<RigidBodyIntegrator> onReference = make(wall), withoutWall = make(0.0);
+    std::unique_ptr<Context> reference = referenceContext(d, *onReference);
+    reference->setVelocitiesToTemperature(300, 7);
+    const vector<Vec3> velocities = reference->getState(State::Velocities).getVelocities();
+    onReference->step(steps);
+    const vector<Vec3> expected = positionsOf(*reference);
+    EXPECT_LE(farthestDrude(d, expected), wall * (1 + 1e-9));
+    std::unique_ptr<Context> unwalled = referenceContext(d, *withoutWall);
+    unwalled->setVelocities(velocities);
+    withoutWall->step(steps);
+    EXPECT_GT(maxDeviation(expected, positionsOf(*unwalled)), 1e-4);   // the wall acted
+    int ran = 0;
+    for (const string& name : devicePlatforms()) {
+        if (!unavailable(name).empty())
+            continue;
+        std::unique_ptr<RigidBodyIntegrator> onDevice = make(wall);
+        std::unique_ptr<Context> context = platformContext(d, *onDevice, name, platformProperties(name));
+        context->setVelocities(velocities);
+        onDevice->step(steps);
+        const vector<Vec3> positions = positionsOf(*context);
+        const double deviation = maxDeviation(expected, positions);
+        std::cout << name << ": " << steps << " steps through reorderings, " << deviation
+                  << " nm from Reference; heat bath " << DrudeView(*onDevice).heatBathEnergy() << " kJ/mol (Reference's "
+                  << DrudeView(*onReference).heatBathEnergy() << ")" << std::endl;
+        EXPECT_LT(deviation, 1e-7) << name;
+        EXPECT_LE(farthestDrude(d, positions), wall * (1 + 1e-9)) << name;
+        EXPECT_LT(worstBodyChange(d, d.positions, positions), 1e-10) << name;
+        ran++;
+    }
+    if (ran == 0)
+        GTEST_SKIP() << "no device platform here";
 }
 
 vector<Config> drudeConfigs() {

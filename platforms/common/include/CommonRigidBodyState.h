@@ -267,7 +267,12 @@ private:
     void restore(int failedStep);
     void restoreAcrossReorder();
     void restoreClock(int failedStep);
-    std::string failureMessage(long long failedStepCount) const;
+    /**
+     * Where a failure was found: the Drude particle, its core and the wall, if the hard wall
+     * failed the step ("" if not), read from the device and cleared.
+     */
+    std::string takeDrudeWallFailure();
+    std::string failureMessage(long long failedStepCount, const std::string& drudeWall = "") const;
     void checked();
 
     OpenMM::ComputeContext& cc;
@@ -334,6 +339,10 @@ private:
     bool hasDrudeGroups = false;
     OpenMM::ComputeArray drudeGroupStart, drudeGroupAtoms, drudeGroupRotates, ungroupedAtoms, drudePairStart,
         drudePairAtoms, drudeNoiseField, drudeRelative, drudeRelativeCountArray;
+    /** 1 + the index (in systemDrudePairAtoms / 2) of a pair the hard wall failed on; 0: none. */
+    OpenMM::ComputeArray drudeFailedPair;
+    /** The hard wall's maxDrudeDistance at the last bounceDrudes, for a failure's message. */
+    double drudeWallDistance = 0;
     OpenMM::ComputeKernel drudeNoise, drudeHardWall, drudeRelativeEnergy, drudeScale;
     int drudeNoiseArguments, drudeNoiseRandomIndex, drudeWallArguments;
     int advanceBackupIndex, advanceKickTime, advanceProjectAfterKick, advanceDriftTime, advanceTolerance,

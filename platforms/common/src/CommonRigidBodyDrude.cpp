@@ -50,6 +50,8 @@ void CommonRigidBodyState::setDrudeGroups(const DrudeGroups& groups) {
     drudePairStart.initialize<int>(cc, pairStarts.size(), "mrattleDrudePairStart");
     drudePairStart.upload(pairStarts);
     drudePairAtoms.initialize<int>(cc, std::max<size_t>(2, systemDrudePairAtoms.size()), "mrattleDrudePairAtoms");
+    drudeFailedPair.initialize<int>(cc, 1, "mrattleDrudeFailedPair");
+    drudeFailedPair.upload(vector<int>(1, 0));
     drudeNoiseField.initialize(cc, cc.getPaddedNumAtoms(), doubleMixed() ? sizeof(mm_double4) : sizeof(mm_float4),
                                "mrattleDrudeNoise");
     initializeMixedArray(drudeRelative, vector<double>(cc.getNumThreadBlocks(), 0.0), "mrattleDrudeRelative");
@@ -94,6 +96,7 @@ void CommonRigidBodyState::setDrudeKernelArguments() {
     wall.add(drudePairStart);
     wall.add(drudePairAtoms);
     wall.add(drudeGroupRotates);
+    wall.add(drudeFailedPair);
     wall.add(cc.getPosq());
     wall.add(cc.getUseMixedPrecision() ? cc.getPosqCorrection() : cc.getPosq());
     wall.add(cc.getVelm());
@@ -131,10 +134,24 @@ void CommonRigidBodyState::addDrudeNoise(double friction, double temperature, do
 void CommonRigidBodyState::bounceDrudes(double maxDistance, double drudeTemperature, double h) {
     if (maxDistance <= 0 || numDrudeGroupsOnDevice == 0)
         return;
+    drudeWallDistance = maxDistance;
     setMixedArg(drudeHardWall, drudeWallArguments, maxDistance);
     setMixedArg(drudeHardWall, drudeWallArguments + 1, BOLTZ * drudeTemperature);
     setMixedArg(drudeHardWall, drudeWallArguments + 2, h);
     launch(drudeHardWall, numDrudeGroupsOnDevice);
+}
+
+std::string CommonRigidBodyState::takeDrudeWallFailure() {
+    if (!hasDrudeGroups)
+        return "";
+    int failedPair;
+    drudeFailedPair.download(&failedPair);   // only where a failure was found: no read in a step
+    if (failedPair <= 0 || 2 * failedPair > (int) systemDrudePairAtoms.size())
+        return "";
+    drudeFailedPair.upload(vector<int>(1, 0));
+    const int drude = systemDrudePairAtoms[2 * (failedPair - 1)], core = systemDrudePairAtoms[2 * failedPair - 1];
+    return "Drude particle " + std::to_string(drude) + " went beyond twice the hard wall's maxDrudeDistance (" +
+           std::to_string(drudeWallDistance) + " nm) from its core " + std::to_string(core);
 }
 
 void CommonRigidBodyState::sumDrudeKineticEnergies() {

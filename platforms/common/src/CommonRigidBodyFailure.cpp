@@ -8,7 +8,9 @@
  * event and read when the next copy is queued (a failure is found at most 2 FlagCopyInterval
  * steps late); the blocking check comes at the end of step(n), before checkpoints and kinetic
  * energies, and at reorderings. A failure found puts back positions, velocities, box, step
- * count, time and the integrator's declared arrays from before the failed step, and throws.
+ * count, time and the integrator's declared arrays from before the failed step, and throws;
+ * where the hard wall failed it, the message names the Drude pair its work item recorded
+ * (read from the device only then: takeDrudeWallFailure).
  */
 #include "CommonRigidBodyState.h"
 #include "openmm/OpenMMException.h"
@@ -131,9 +133,10 @@ void CommonRigidBodyState::synchronize() {
     }
     const int failedStep = failed - 1;
     const long long failedStepCount = stepCountAtCheck + failedStep;
+    const std::string drudeWall = takeDrudeWallFailure();
     restore(failedStep);
     checked();
-    throw OpenMMException(failureMessage(failedStepCount));
+    throw OpenMMException(failureMessage(failedStepCount, drudeWall));
 }
 
 void CommonRigidBodyState::atomsReordered() {
@@ -149,7 +152,7 @@ void CommonRigidBodyState::atomsReordered() {
             integratorBackup.copyTo(integratorArrays);
             restoreAcrossReorder();
             failure.upload(vector<int>(1, 0));
-            deferred = failureMessage(failedStepCount);  // a listener must not throw: the next check does
+            deferred = failureMessage(failedStepCount, takeDrudeWallFailure());  // a listener must not throw: the next check does
         }
     }
     rememberOrder();
@@ -162,6 +165,8 @@ void CommonRigidBodyState::rememberOrder() {
 
 void CommonRigidBodyState::resetFailure() {
     failure.upload(vector<int>(1, 0));
+    if (hasDrudeGroups)
+        drudeFailedPair.upload(vector<int>(1, 0));
     copyQueued = false;
     deferred.clear();
     checked();
@@ -235,7 +240,11 @@ void CommonRigidBodyState::restoreAcrossReorder() {
         uploadFromDouble(cc.getPosqCorrection(), correction, 4);
 }
 
-std::string CommonRigidBodyState::failureMessage(long long failedStepCount) const {
+std::string CommonRigidBodyState::failureMessage(long long failedStepCount, const std::string& drudeWall) const {
+    if (!drudeWall.empty())
+        return integratorName + ": at step " + std::to_string(failedStepCount) + " " + drudeWall +
+               ": the step size is too large for the forces, or they are not finite. The Context holds the state "
+               "from before that step.";
     return integratorName + ": at step " + std::to_string(failedStepCount) +
            " the position reset of a rigid body found no rotation, the free-particle constraints did not converge, " +
            (hasDrudeGroups ? "a Drude particle went beyond twice the hard wall's maxDrudeDistance from its core, " : "") +

@@ -129,18 +129,25 @@ INLINE_DEVICE bool bounceDrude(int drude, int core, bool coreInBody, GLOBAL real
     return true;
 }
 
-/** The hard wall, one work item per group, its pairs in the DrudeForce's order (pairAtoms: Drude, core). */
+/**
+ * The hard wall, one work item per group, its pairs in the DrudeForce's order (pairAtoms: Drude,
+ * core). A pair beyond twice the wall fails the step and writes 1 + its index (the same in every
+ * atom order) to failedPair[0], which the host reads only once it has found the failure, to name
+ * the particle; of several failing pairs, one's index stays.
+ */
 KERNEL void drudeHardWall(STATE_ARGUMENTS, int numGroups, GLOBAL const int* RESTRICT pairStart,
-        GLOBAL const int* RESTRICT pairAtoms, GLOBAL const int* RESTRICT groupRotates, GLOBAL real4* RESTRICT posq,
-        GLOBAL real4* RESTRICT posqCorrection, GLOBAL mixed4* RESTRICT velm, mixed maxDistance, mixed kTDrude,
-        mixed h) {
+        GLOBAL const int* RESTRICT pairAtoms, GLOBAL const int* RESTRICT groupRotates, GLOBAL int* RESTRICT failedPair,
+        GLOBAL real4* RESTRICT posq, GLOBAL real4* RESTRICT posqCorrection, GLOBAL mixed4* RESTRICT velm,
+        mixed maxDistance, mixed kTDrude, mixed h) {
     if (failure[0] != 0)
         return;
     for (int group = GLOBAL_ID; group < numGroups; group += GLOBAL_SIZE)
         for (int k = pairStart[group]; k < pairStart[group+1]; k++)
             if (!bounceDrude(pairAtoms[2*k], pairAtoms[2*k+1], groupRotates[group] != 0, posq, posqCorrection, velm,
-                             maxDistance, kTDrude, h))
+                             maxDistance, kTDrude, h)) {
+                failedPair[0] = k + 1;
                 recordFailure(failure, stepIndex);
+            }
 }
 
 /**
