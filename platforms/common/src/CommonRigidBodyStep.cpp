@@ -33,6 +33,12 @@ const double StaleReference = 1e-4;
  * turned than this many times the round-off of the body's stored coordinates (plus a box).
  */
 const double FitTolerance = 4;
+/**
+ * In double precision steps do not rebuild bodies from their reference, which their shapes
+ * leave by round-off step by step: there a body (not linear, which the host straightens)
+ * also fits within this many nm, far below what the host would correct (1e-6 of a constraint).
+ */
+const double DoubleFitDistance = 1e-9;
 
 /** A constant as the device code reads it: in the integration arithmetic's precision. */
 std::string mixedConstant(double value) {
@@ -65,6 +71,7 @@ std::map<std::string, std::string> CommonRigidBodyState::programDefines(bool use
     defines["FINITE_BOUND"] = mixedConstant(DeviceFiniteBound);
     defines["STALE_REFERENCE"] = mixedConstant(StaleReference);
     defines["FIT_TOLERANCE"] = mixedConstant(FitTolerance);
+    defines["DOUBLE_FIT_DISTANCE"] = mixedConstant(DoubleFitDistance);
     defines["LARGEST_SPEED"] = mixedConstant(LargestSpeed);
     defines["REDUCTION_THREADS"] = std::to_string(ReductionThreads);
     defines["LARGE_BODY_ATOMS"] = std::to_string(LargeBodyAtoms);

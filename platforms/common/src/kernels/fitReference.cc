@@ -32,8 +32,10 @@ INLINE_DEVICE Matrix3 transpose(Matrix3 A) {
  * Each body's turn Q from its reference to its positions, taken from three of its atoms
  * (bodyFrame: offsets i, j, k in the body, k < 0 for a linear body; .w = 0 for none), then
  * checked on every atom: |(x_k - x_0) - Q (ref_k - ref_0)| within FIT_TOLERANCE times the
- * round-off of the body's stored coordinates. A body that fits gets Q as its orientation
- * (single and mixed precision); one that does not, or is not finite, sets misfit[0] = 1.
+ * round-off of the body's stored coordinates (in double precision, where nothing is rebuilt
+ * from the reference, DOUBLE_FIT_DISTANCE for a body that is not linear). A body that fits
+ * gets Q as its orientation (single and mixed precision); one that does not, or is not
+ * finite, sets misfit[0] = 1.
  */
 KERNEL void fitBodiesToReference(int numBodies, GLOBAL const int* RESTRICT bodyStart,
         GLOBAL const int* RESTRICT bodyAtoms, GLOBAL const int* RESTRICT bodyShape, GLOBAL const int4* RESTRICT bodyFrame,
@@ -68,7 +70,11 @@ KERNEL void fitBodiesToReference(int numBodies, GLOBAL const int* RESTRICT bodyS
             if (!(squared <= error))  // NaN propagates (max() need not)
                 error = squared;
         }
-        const mixed allowed = FIT_TOLERANCE*roundoff*(largest + boxLength);
+        mixed allowed = FIT_TOLERANCE*roundoff*(largest + boxLength);
+#ifndef REBUILD_SHAPES
+        if (frame.z >= 0)
+            allowed = max(allowed, DOUBLE_FIT_DISTANCE);
+#endif
         if (!(error <= allowed*allowed))
             misfit[0] = 1;
 #ifdef REBUILD_SHAPES
