@@ -227,7 +227,7 @@ private:
     bool rebuildsShapes() const {
         return !cc.getUseDoublePrecision();
     }
-    /** The bodies' reference geometry and identity orientations from these positions (made exact in place). */
+    /** The bodies' reference geometry and identity orientations from these positions (made exact in place in single and mixed precision). */
     void setReference(std::vector<OpenMM::Vec3>& positions);
     /** Each body's three atoms from which fitsReference() turns its reference (bodyFrame). */
     void chooseFrames(const std::vector<OpenMM::Vec3>& positions);

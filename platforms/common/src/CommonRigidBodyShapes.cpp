@@ -77,8 +77,11 @@ void CommonRigidBodyState::updateShapes(ContextImpl& context) {
 }
 
 void CommonRigidBodyState::setReference(vector<Vec3>& exact) {
-    // In double, fully constrained bodies exactly on their constraint geometry: the shape every step rebuilds.
-    shapeConstraints->applyExactly(exact, &shapes);
+    // Single and mixed precision: fully constrained bodies exactly on their constraint geometry
+    // (in double), the shape every step rebuilds. Double: the shapes as set, which fitsReference()
+    // compares with (OpenMM's SETTLE is exact only to about 5e-9 nm).
+    if (rebuildsShapes())
+        shapeConstraints->applyExactly(exact, &shapes);
     // Written in the device's element type, into buffers kept across calls.
     const bool useDouble = bodyReference.getElementSize() == sizeof(mm_double4);
     if (useDouble)
