@@ -253,8 +253,14 @@ TEST_P(DevicePlatform, PositionsSetAgainAreCheckedOnTheDeviceAgainstEachBodysSha
     // 64 waters, 63 constrained to their geometry and the first rigid by declaration alone.
     // A saved State set again fits every body's reference turned (kernels/fitReference.cc:
     // no download); positions that do not fit are classified on the host as at the first
-    // set: an off-geometry water is put back on its constraints, a new shape is kept, NaN refused.
+    // set: an off-geometry water is put back on its constraints, a new shape is kept, NaN refused
+    // (in a body, and in a free atom, which no body's fit reads).
     Cluster c = waterBox(NonbondedForce::NoCutoff);
+    const int freeAtom = c.system->addParticle(4.0);
+    for (int f = 0; f < c.system->getNumForces(); f++)
+        if (NonbondedForce* nonbonded = dynamic_cast<NonbondedForce*>(&c.system->getForce(f)))
+            nonbonded->addParticle(0, 0.1, 0);
+    c.positions.push_back(Vec3(3, 3, 3));
     const State start = rigidStart(c);
     for (size_t m = 1; m < c.molecules.size(); m++)
         for (int a = 0; a < 3; a++)
@@ -294,10 +300,13 @@ TEST_P(DevicePlatform, PositionsSetAgainAreCheckedOnTheDeviceAgainstEachBodysSha
         EXPECT_LT(maxDistanceChange(moved, stepped, declared), roundoff) << precision;
         EXPECT_GT(maxDistanceChange(start.getPositions(), stepped, declared), 5e-4) << precision;
         EXPECT_LT(maxDistanceChange(start.getPositions(), stepped, constrained), onGeometry) << precision;
-        moved[c.molecules[5][2]][1] = std::nan("");
-        const string nanAtom = std::to_string(c.molecules[5][2]);
-        EXPECT_NE(string::npos, messageOf([&]() { context->setPositions(moved); })
-                                    .find("the position of particle " + nanAtom + " is not finite")) << precision;
+        for (int nanAtom : {c.molecules[5][2], freeAtom}) {
+            vector<Vec3> bad = stepped;  // positions that fit but for the NaN
+            bad[nanAtom][1] = std::nan("");
+            EXPECT_NE(string::npos, messageOf([&]() { context->setPositions(bad); })
+                                        .find("the position of particle " + std::to_string(nanAtom) + " is not finite"))
+                << precision << " atom " << nanAtom;
+        }
     }
 }
 

@@ -143,11 +143,12 @@ void CommonRigidBodyState::chooseFrames(const vector<Vec3>& exact) {
 }
 
 bool CommonRigidBodyState::fitsReference(ContextImpl& context) {
-    if (!referenceOnDevice || numBodies == 0)
+    if (!referenceOnDevice)
         return false;
     if (!fitBodies) {
         fitBodies = stepProgram->createKernel("fitBodiesToReference");
         Arguments arguments(fitBodies, doubleMixed());
+        arguments.add(cc.getNumAtoms());
         arguments.add(numBodies);
         arguments.add(bodyStart);
         arguments.add(bodyAtoms);
@@ -163,7 +164,7 @@ bool CommonRigidBodyState::fitsReference(ContextImpl& context) {
     }
     setMixedArg(fitBodies, fitRoundoff, coordinateRoundoff());
     setMixedArg(fitBodies, fitRoundoff + 1, largestBoxVector(context));
-    fitBodies->execute(numBodies);
+    fitBodies->execute(std::max(numBodies, cc.getNumAtoms()));
     int misfit;
     misfitBodies.download(&misfit);
     if (misfit == 0)

@@ -35,12 +35,17 @@ INLINE_DEVICE Matrix3 transpose(Matrix3 A) {
  * round-off of the body's stored coordinates (in double precision, where nothing is rebuilt
  * from the reference, DOUBLE_FIT_DISTANCE for a body that is not linear). A body that fits
  * gets Q as its orientation (single and mixed precision); one that does not, or is not
- * finite, sets misfit[0] = 1.
+ * finite, sets misfit[0] = 1, as does any atom's position (free ones too) that is not finite.
  */
-KERNEL void fitBodiesToReference(int numBodies, GLOBAL const int* RESTRICT bodyStart,
+KERNEL void fitBodiesToReference(int numAtoms, int numBodies, GLOBAL const int* RESTRICT bodyStart,
         GLOBAL const int* RESTRICT bodyAtoms, GLOBAL const int* RESTRICT bodyShape, GLOBAL const int4* RESTRICT bodyFrame,
         GLOBAL const mixed4* RESTRICT reference, GLOBAL mixed* RESTRICT orientation, GLOBAL const real4* RESTRICT posq,
         GLOBAL const real4* RESTRICT posqCorrection, mixed roundoff, mixed boxLength, GLOBAL int* RESTRICT misfit) {
+    for (int atom = GLOBAL_ID; atom < numAtoms; atom += GLOBAL_SIZE) {
+        const real4 p = posq[atom];
+        if (!(fabs(p.x) <= FINITE_BOUND && fabs(p.y) <= FINITE_BOUND && fabs(p.z) <= FINITE_BOUND))
+            misfit[0] = 1;  // the host names it
+    }
     for (int body = GLOBAL_ID; body < numBodies; body += GLOBAL_SIZE) {
         if (bodyShape[body] == SHAPE_POINT)
             continue;
