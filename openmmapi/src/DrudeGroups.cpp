@@ -81,10 +81,12 @@ DrudeGroups::DrudeGroups(const System& system, const RigidBodyTopology& topology
             Group group;
             group.rotates = (body >= 0);
             group.particles = (body >= 0 ? topology.getBodyParticles(body) : vector<int>{pair.second});
+            group.places = group.particles;
             found = index.insert({key, (int) groups.size()}).first;
             groups.push_back(group);
         }
         groups[found->second].particles.push_back(pair.first);
+        groups[found->second].places.push_back(pair.second);
     }
     for (const Group& group : groups)
         for (int i : group.particles)
@@ -93,13 +95,16 @@ DrudeGroups::DrudeGroups(const System& system, const RigidBodyTopology& topology
 
 void DrudeGroups::rigidPart(const Group& group, const vector<Vec3>& x, const vector<Vec3>& v,
                             const vector<double>& masses, vector<Vec3>& out) {
-    // V = P / M; for an augmented body also w = I^+ L about the centre of mass (the
-    // pseudo-inverse: a linear group has no rotation about its axis).
+    // V = P / M; for an augmented body also w = I^+ L about the centre of mass, both with each
+    // particle at its place, a Drude particle at its core (the pseudo-inverse: a linear group
+    // has no rotation about its axis).
+    const size_t size = group.particles.size();
     double total = 0;
     Vec3 center, momentum;
-    for (int i : group.particles) {
+    for (size_t k = 0; k < size; k++) {
+        const int i = group.particles[k];
         total += masses[i];
-        center += x[i] * masses[i];
+        center += x[group.places[k]] * masses[i];
         momentum += v[i] * masses[i];
     }
     center /= total;
@@ -108,8 +113,9 @@ void DrudeGroups::rigidPart(const Group& group, const vector<Vec3>& x, const vec
     if (group.rotates) {
         Eigen::Matrix3d inertia = Eigen::Matrix3d::Zero();
         Eigen::Vector3d angular = Eigen::Vector3d::Zero();
-        for (int i : group.particles) {
-            const Vec3 r = x[i] - center, u = v[i] - velocity;
+        for (size_t k = 0; k < size; k++) {
+            const int i = group.particles[k];
+            const Vec3 r = x[group.places[k]] - center, u = v[i] - velocity;
             const Eigen::Vector3d a(r[0], r[1], r[2]);
             inertia += masses[i] * (a.squaredNorm() * Eigen::Matrix3d::Identity() - a * a.transpose());
             const Vec3 l = r.cross(u) * masses[i];
@@ -124,8 +130,8 @@ void DrudeGroups::rigidPart(const Group& group, const vector<Vec3>& x, const vec
                 w += solver.eigenvectors().col(k) * (solver.eigenvectors().col(k).dot(angular) / values[k]);
         omega = Vec3(w[0], w[1], w[2]);
     }
-    for (int i : group.particles)
-        out[i] = velocity + omega.cross(x[i] - center);
+    for (size_t k = 0; k < size; k++)
+        out[group.particles[k]] = velocity + omega.cross(x[group.places[k]] - center);
 }
 
 void DrudeGroups::scaleRelativeMotion(ContextImpl& context, const RigidBodyTopology& topology, const char* integratorName,

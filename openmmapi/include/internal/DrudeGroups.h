@@ -17,15 +17,17 @@ namespace MRattlePlugin {
 /**
  * The Drude oscillators of a System (its DrudeForce's pairs) grouped for the Drude
  * integrators' split of the velocities (docs/ALGORITHM.md, "Drude oscillators"): each body
- * with the Drude particles of its cores (an augmented body, whose rigid motions are R), each
- * free core with its Drude particles (a free pair, whose translation is R). The rest of a
- * group's motion, C, is the Drude particles' relative motion: 3 degrees of freedom each. A
- * host helper every platform's state can use.
+ * with the Drude particles of its cores (an augmented body), each free core with its Drude
+ * particles (a free pair). R is a group's rigid motions with every Drude particle carried at
+ * its core's velocity (translation only for a free pair); the rest, C, is the Drude
+ * particles' motion relative to their cores: 3 degrees of freedom each. A host helper every
+ * platform's state can use.
  */
 class OPENMM_EXPORT_MRATTLE DrudeGroups {
 public:
     struct Group {
         std::vector<int> particles;   // the body's atoms or the free core, then the Drude particles
+        std::vector<int> places;      // per particle, whose position places it in R: itself, or a Drude particle's core
         bool rotates;                 // R holds the group's rotations (an augmented body), else translations only
     };
     DrudeGroups() = default;
@@ -59,7 +61,8 @@ public:
     }
     /**
      * R's part of the velocities v on one group: the M-orthogonal projection onto the
-     * group's rigid motions (or translation), written to out at the group's particles.
+     * group's rigid motions, each particle at its place (or onto its translation), written to
+     * out at the group's particles.
      */
     static void rigidPart(const Group& group, const std::vector<OpenMM::Vec3>& x, const std::vector<OpenMM::Vec3>& v,
                           const std::vector<double>& masses, std::vector<OpenMM::Vec3>& out);

@@ -333,11 +333,12 @@ private:
     OpenMM::ComputeKernel advanceGroups, projectBodies, constrainFreeVelocities, collideBodies, partialSums,
         bodyKineticEnergy, findUnusable;
     // The Drude groups (setDrudeGroups, CommonRigidBodyDrude.cpp): System indices, group-major
-    // (a group's atoms, then its Drude particles), the atoms in no group, (Drude, core) pairs group-major.
-    std::vector<int> systemDrudeGroupAtoms, systemUngroupedAtoms, systemDrudePairAtoms;
+    // (a group's atoms, then its Drude particles), where each is placed in R (itself, a Drude particle's
+    // core), the atoms in no group, (Drude, core) pairs group-major.
+    std::vector<int> systemDrudeGroupAtoms, systemDrudeGroupPlaces, systemUngroupedAtoms, systemDrudePairAtoms;
     int numDrudeGroupsOnDevice = 0, numUngrouped = 0;
     bool hasDrudeGroups = false;
-    OpenMM::ComputeArray drudeGroupStart, drudeGroupAtoms, drudeGroupRotates, ungroupedAtoms, drudePairStart,
+    OpenMM::ComputeArray drudeGroupStart, drudeGroupAtoms, drudeGroupPlaces, drudeGroupRotates, ungroupedAtoms, drudePairStart,
         drudePairAtoms, drudeNoiseField, drudeRelative, drudeRelativeCountArray;
     /** 1 + the index (in systemDrudePairAtoms / 2) of a pair the hard wall failed on; 0: none. */
     OpenMM::ComputeArray drudeFailedPair;

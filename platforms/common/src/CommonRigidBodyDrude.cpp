@@ -1,7 +1,7 @@
 /*
  * CommonRigidBodyState: the Drude integrators' phases (kernels/drude.cc), as
  * ReferenceRigidBodyDrude.cpp on the host: the noise split between each Drude group's rigid
- * motion and its Drude particles' relative motion, the hard wall, the kinetic energy of the
+ * motion (each Drude particle at its core) and its Drude particles' motion relative to their cores, the hard wall, the kinetic energy of the
  * relative motion and the scaling of the two parts by two factors. One work item per Drude
  * group (a body with the Drude particles of its cores, or a free core with its own) and per
  * atom in no group.
@@ -23,6 +23,7 @@ void CommonRigidBodyState::setDrudeGroups(const DrudeGroups& groups) {
     for (const auto& pair : groups.getPairs())
         coreOf[pair.first] = pair.second;
     for (const DrudeGroups::Group& group : groups.getGroups()) {
+        systemDrudeGroupPlaces.insert(systemDrudeGroupPlaces.end(), group.places.begin(), group.places.end());
         for (int atom : group.particles) {
             systemDrudeGroupAtoms.push_back(atom);
             grouped[atom] = true;
@@ -43,6 +44,7 @@ void CommonRigidBodyState::setDrudeGroups(const DrudeGroups& groups) {
     drudeGroupStart.initialize<int>(cc, groupStarts.size(), "mrattleDrudeGroupStart");
     drudeGroupStart.upload(groupStarts);
     drudeGroupAtoms.initialize<int>(cc, std::max<size_t>(1, systemDrudeGroupAtoms.size()), "mrattleDrudeGroupAtoms");
+    drudeGroupPlaces.initialize<int>(cc, std::max<size_t>(1, systemDrudeGroupPlaces.size()), "mrattleDrudeGroupPlaces");
     rotates.resize(std::max<size_t>(1, rotates.size()), 0);
     drudeGroupRotates.initialize<int>(cc, rotates.size(), "mrattleDrudeGroupRotates");
     drudeGroupRotates.upload(rotates);
@@ -69,6 +71,7 @@ void CommonRigidBodyState::addDrudeGroupArguments(Arguments& arguments) {
     arguments.add(numDrudeGroupsOnDevice);
     arguments.add(drudeGroupStart);
     arguments.add(drudeGroupAtoms);
+    arguments.add(drudeGroupPlaces);
     arguments.add(drudeGroupRotates);
     arguments.add(numUngrouped);
     arguments.add(ungroupedAtoms);

@@ -237,6 +237,7 @@ void CommonRigidBodyState::mapAtoms() {
     upload(systemClusterAtoms, clusterAtoms);
     upload(systemFreeAtoms, freeAtoms);
     upload(systemDrudeGroupAtoms, drudeGroupAtoms);
+    upload(systemDrudeGroupPlaces, drudeGroupPlaces);
     upload(systemUngroupedAtoms, ungroupedAtoms);
     upload(systemDrudePairAtoms, drudePairAtoms);
     if (!systemConstraintAtoms.empty()) {

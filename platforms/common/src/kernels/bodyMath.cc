@@ -179,11 +179,12 @@ typedef struct {
 
 /**
  * The sums over a body's atoms first, first + stride, ... < end (velocities' .w the inverse
- * mass) about origin; with checkShape, also how far the body's shape, seen from origin, is
- * from its reference geometry turned by Q.
+ * mass) about origin, atom bodyAtoms[k] placed at the position of places[k] (the same array
+ * for a body; a Drude group places a Drude particle at its core); with checkShape, also how
+ * far the body's shape, seen from origin, is from its reference geometry turned by Q.
  */
 INLINE_DEVICE BodyAtomSums sumBodyAtoms(int first, int end, int stride, mixed3 origin, GLOBAL const int* RESTRICT bodyAtoms,
-        GLOBAL const real4* RESTRICT posq, GLOBAL const real4* RESTRICT posqCorrection,
+        GLOBAL const int* RESTRICT places, GLOBAL const real4* RESTRICT posq, GLOBAL const real4* RESTRICT posqCorrection,
         GLOBAL const mixed4* RESTRICT velm, bool checkShape, GLOBAL const mixed4* RESTRICT reference, mixed3 ref0,
         Matrix3 Q) {
     BodyAtomSums s;
@@ -195,7 +196,7 @@ INLINE_DEVICE BodyAtomSums sumBodyAtoms(int first, int end, int stride, mixed3 o
         const int atom = bodyAtoms[k];
         const mixed4 v = velm[atom];
         const mixed m = 1/v.w;  // body members are massive
-        const mixed3 a = loadPosition(posq, posqCorrection, atom) - origin;
+        const mixed3 a = loadPosition(posq, posqCorrection, places[k]) - origin;
         const mixed3 velocity = make_mixed3(v.x, v.y, v.z);
         s.mass += m;
         s.moment += m*a;
@@ -242,7 +243,7 @@ INLINE_DEVICE BodySums gatherBody(int start, int end, GLOBAL const int* RESTRICT
         GLOBAL const real4* RESTRICT posq, GLOBAL const real4* RESTRICT posqCorrection,
         GLOBAL const mixed4* RESTRICT velm, bool checkShape, GLOBAL const mixed4* RESTRICT reference, Matrix3 Q) {
     const mixed3 origin = loadPosition(posq, posqCorrection, bodyAtoms[start]);
-    const BodyAtomSums s = sumBodyAtoms(start, end, 1, origin, bodyAtoms, posq, posqCorrection, velm, checkShape,
+    const BodyAtomSums s = sumBodyAtoms(start, end, 1, origin, bodyAtoms, bodyAtoms, posq, posqCorrection, velm, checkShape,
                                         reference, firstReference(start, checkShape, reference), Q);
     return bodySumsAbout(s, origin);
 }

@@ -2,14 +2,16 @@
  * The Drude integrators' kernels (CommonRigidBodyDrude.cpp; docs/ALGORITHM.md, "Drude
  * oscillators"), one work item per Drude group (a body with the Drude particles of its cores,
  * or a free core with its own) and per atom in no group. A group's velocities split into R,
- * its rigid motion (translation only for a free pair: V + w x a with w = I^+ L about its
- * centre of mass), and C = v - R, its Drude particles' relative motion. Each mirrors
+ * its rigid motion with each Drude particle placed at its core (translation only for a free
+ * pair: V + w x a with w = I^+ L about its centre of mass), and C = v - R, its Drude
+ * particles' motion relative to their cores. Each mirrors
  * ReferenceRigidBodyDrude.cpp; each does nothing once a step has failed.
  */
 
 /** What the group kernels take after STATE_ARGUMENTS (CommonRigidBodyState::addDrudeGroupArguments). */
 #define DRUDE_GROUP_ARGUMENTS int numGroups, GLOBAL const int* RESTRICT groupStart, \
-        GLOBAL const int* RESTRICT groupAtoms, GLOBAL const int* RESTRICT groupRotates, int numUngrouped, \
+        GLOBAL const int* RESTRICT groupAtoms, GLOBAL const int* RESTRICT groupPlaces, \
+        GLOBAL const int* RESTRICT groupRotates, int numUngrouped, \
         GLOBAL const int* RESTRICT ungroupedAtoms, GLOBAL real4* RESTRICT posq, \
         GLOBAL real4* RESTRICT posqCorrection, GLOBAL mixed4* RESTRICT velm
 
@@ -23,11 +25,16 @@
 #define DRUDE_LINEAR_DETERMINANT 1e-5f
 #endif
 
-/** The rigid motion R of a field of velocities (field[atom].w: the inverse mass) over a group. */
-INLINE_DEVICE RigidMotion groupRigidMotion(int start, int end, GLOBAL const int* RESTRICT atoms, bool rotates,
-        GLOBAL const real4* RESTRICT posq, GLOBAL const real4* RESTRICT posqCorrection,
-        GLOBAL const mixed4* RESTRICT field) {
-    const BodySums sums = gatherBody(start, end, atoms, posq, posqCorrection, field, false, field, zeroMatrix());
+/**
+ * The rigid motion R of a field of velocities (field[atom].w: the inverse mass) over a group,
+ * groupAtoms[k] placed at the position of places[k].
+ */
+INLINE_DEVICE RigidMotion groupRigidMotion(int start, int end, GLOBAL const int* RESTRICT atoms,
+        GLOBAL const int* RESTRICT places, bool rotates, GLOBAL const real4* RESTRICT posq,
+        GLOBAL const real4* RESTRICT posqCorrection, GLOBAL const mixed4* RESTRICT field) {
+    const mixed3 origin = loadPosition(posq, posqCorrection, places[start]);
+    const BodySums sums = bodySumsAbout(sumBodyAtoms(start, end, 1, origin, atoms, places, posq, posqCorrection, field,
+                                                     false, field, origin, zeroMatrix()), origin);
     int shape = SHAPE_POINT;  // a free pair only translates
     if (rotates) {
         const mixed j = sums.J.m00 + sums.J.m11 + sums.J.m22;
@@ -36,7 +43,7 @@ INLINE_DEVICE RigidMotion groupRigidMotion(int start, int end, GLOBAL const int*
                           I.m02*(I.m10*I.m21 - I.m11*I.m20);
         shape = (j <= 0 ? SHAPE_POINT : det <= DRUDE_LINEAR_DETERMINANT*j*j*j ? SHAPE_LINEAR : SHAPE_GENERAL);
     }
-    return rigidMotionOf(sums, start, end, atoms, shape, posq, posqCorrection);
+    return rigidMotionOf(sums, start, end, places, shape, posq, posqCorrection);
 }
 
 INLINE_DEVICE mixed3 rigidVelocityAt(RigidMotion motion, mixed3 x) {
@@ -67,11 +74,11 @@ KERNEL void drudeNoise(STATE_ARGUMENTS, DRUDE_GROUP_ARGUMENTS, GLOBAL mixed4* RE
             const mixed s = sqrt(w);
             noise[atom] = make_mixed4(s*g.x, s*g.y, s*g.z, w);
         }
-        const RigidMotion motion = groupRigidMotion(start, end, groupAtoms, rotates, posq, posqCorrection, velm);
-        const RigidMotion noiseMotion = groupRigidMotion(start, end, groupAtoms, rotates, posq, posqCorrection, noise);
+        const RigidMotion motion = groupRigidMotion(start, end, groupAtoms, groupPlaces, rotates, posq, posqCorrection, velm);
+        const RigidMotion noiseMotion = groupRigidMotion(start, end, groupAtoms, groupPlaces, rotates, posq, posqCorrection, noise);
         for (int k = start; k < end; k++) {
             const int atom = groupAtoms[k];
-            const mixed3 x = loadPosition(posq, posqCorrection, atom);
+            const mixed3 x = loadPosition(posq, posqCorrection, groupPlaces[k]);
             const mixed4 v4 = velm[atom], u4 = noise[atom];
             const mixed3 v = make_mixed3(v4.x, v4.y, v4.z), u = make_mixed3(u4.x, u4.y, u4.z);
             const mixed3 vR = rigidVelocityAt(motion, x), uR = rigidVelocityAt(noiseMotion, x);
@@ -161,12 +168,12 @@ KERNEL void drudeRelativeEnergies(STATE_ARGUMENTS, DRUDE_GROUP_ARGUMENTS, GLOBAL
     mixed sum = 0;
     for (int group = GLOBAL_ID; group < numGroups; group += GLOBAL_SIZE) {
         const int start = groupStart[group], end = groupStart[group+1];
-        const RigidMotion motion = groupRigidMotion(start, end, groupAtoms, groupRotates[group] != 0, posq,
+        const RigidMotion motion = groupRigidMotion(start, end, groupAtoms, groupPlaces, groupRotates[group] != 0, posq,
                                                     posqCorrection, velm);
         for (int k = start; k < end; k++) {
             const int atom = groupAtoms[k];
             const mixed4 v = velm[atom];
-            const mixed3 c = make_mixed3(v.x, v.y, v.z) - rigidVelocityAt(motion, loadPosition(posq, posqCorrection, atom));
+            const mixed3 c = make_mixed3(v.x, v.y, v.z) - rigidVelocityAt(motion, loadPosition(posq, posqCorrection, groupPlaces[k]));
             sum += dot(c, c)/v.w;
         }
     }
@@ -192,13 +199,13 @@ KERNEL void scaleDrudeVelocities(STATE_ARGUMENTS, DRUDE_GROUP_ARGUMENTS) {
             continue;
         }
         const int start = groupStart[item], end = groupStart[item+1];
-        const RigidMotion motion = groupRigidMotion(start, end, groupAtoms, groupRotates[item] != 0, posq,
+        const RigidMotion motion = groupRigidMotion(start, end, groupAtoms, groupPlaces, groupRotates[item] != 0, posq,
                                                     posqCorrection, velm);
         for (int k = start; k < end; k++) {
             const int atom = groupAtoms[k];
             const mixed4 v4 = velm[atom];
             const mixed3 v = make_mixed3(v4.x, v4.y, v4.z);
-            const mixed3 vR = rigidVelocityAt(motion, loadPosition(posq, posqCorrection, atom));
+            const mixed3 vR = rigidVelocityAt(motion, loadPosition(posq, posqCorrection, groupPlaces[k]));
             const mixed3 next = factor*vR + drudeFactor*(v - vR);
             velm[atom] = make_mixed4(next.x, next.y, next.z, v4.w);
         }

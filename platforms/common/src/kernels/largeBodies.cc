@@ -50,7 +50,7 @@ INLINE_DEVICE BodySums gatherLargeBody(LOCAL_ARG BodyAtomSums* scratch, bool nee
     SYNC_THREADS;  // the first atom and its reference as the last phase left them
     const mixed3 origin = loadPosition(posq, posqCorrection, bodyAtoms[start]);
     const BodyAtomSums share = sumBodyAtoms(start + LOCAL_ID, (needed ? end : start), LOCAL_SIZE, origin, bodyAtoms,
-                                            posq, posqCorrection, velm, checkShape, reference,
+                                            bodyAtoms, posq, posqCorrection, velm, checkShape, reference,
                                             firstReference(start, checkShape, reference), Q);
     return bodySumsAbout(sumOverWorkGroup(scratch, share), origin);
 }
