@@ -2,7 +2,8 @@
  * MRattleNoseHooverIntegrator and MRattleBussiIntegrator on every platform that runs them:
  * at zero coupling they are MRattleIntegrator bit for bit; they sample the canonical
  * kinetic-energy distribution of the rigid-body degrees of freedom (mean and variance,
- * with error bars from blocks); their conserved quantity (kinetic + potential + heat bath)
+ * with error bars from blocks), CSVR at infinite coupling each kinetic energy from the
+ * chi-squared distribution; their conserved quantity (kinetic + potential + heat bath)
  * fluctuates as NVE's energy does and does not drift; checkpoints restart them bit for bit;
  * they run in a CompoundIntegrator and with a MonteCarloBarostat; bad settings are refused
  * and the settings serialize.
@@ -125,6 +126,39 @@ TEST_P(Thermostat, SamplesTheCanonicalKineticEnergy) {
     EXPECT_LT(std::fabs(m.value - meanKinetic), 4 * m.error);
     EXPECT_LT(std::fabs(v.value - variance), 4 * v.error);
     EXPECT_LT(v.error, 0.15 * variance);  // resolves a variance off by a sixth
+}
+
+TEST_P(Thermostat, CsvrAtInfiniteCouplingDrawsEachKineticEnergyAfresh) {
+    // CSVR with c = exp(-frequency h / 2) = 0 draws the kinetic energy of each half step anew:
+    // K / (kT / 2) is chi-squared with dof degrees of freedom (R_1^2 and the sum of dof - 1
+    // more squared normals), every step independent. With and without the CMMotionRemover
+    // (dof - 1 even and odd); 3000 steps each resolve the mean to 0.2% and the variance to 3%.
+    if (GetParam().integrator != "MRattleBussi")
+        GTEST_SKIP() << "a CSVR property";
+    for (bool remover : {true, false}) {
+        Cluster c = waterBox();
+        if (!remover)
+            c.system->removeForce(c.system->getNumForces() - 1);
+        MRattleBussiIntegrator integrator(300, 1e6, 0.001);
+        integrator.setRandomNumberSeed(23);
+        std::unique_ptr<Context> context = makeContext(*c.system, integrator);
+        context->setPositions(c.positions);
+        context->setVelocitiesToTemperature(300, 5);
+        const double dof = integrator.getNumDegreesOfFreedom(), kT = BOLTZ * 300;
+        vector<double> chi;
+        for (int i = 0; i < 3000; i++) {
+            integrator.step(1);
+            chi.push_back(context->getState(State::Energy).getKineticEnergy() / (0.5 * kT));
+        }
+        const double m = mean(chi), sd = standardDeviation(chi), n = chi.size();
+        // Standard errors of the chi-squared distribution's mean and variance (kurtosis 3 + 12 / dof).
+        const double meanError = std::sqrt(2 * dof / n), varianceError = 2 * dof * std::sqrt((2 + 12 / dof) / n);
+        std::cout << (remover ? "with" : "without") << " the remover, dof " << dof << ": mean " << m << " +- "
+                  << meanError << ", variance " << sd * sd << " +- " << varianceError << " (chi-squared: " << dof
+                  << ", " << 2 * dof << ")" << std::endl;
+        EXPECT_LT(std::fabs(m - dof), 4 * meanError);
+        EXPECT_LT(std::fabs(sd * sd - 2 * dof), 4 * varianceError);
+    }
 }
 
 TEST_P(Thermostat, ConservedQuantityFluctuatesAsNVEsEnergyAndDoesNotDrift) {

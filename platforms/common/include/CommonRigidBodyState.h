@@ -119,11 +119,10 @@ public:
     /** Set a number in the integration arithmetic's precision ('mixed'). */
     void setMixedArg(OpenMM::ComputeKernel& kernel, int index, double value) const;
     /**
-     * Twice the kinetic energy as partial sums per work group (and the sum of the squares of
-     * numGaussians - 1 of OpenMM's Gaussian numbers, drawn here): returns the index of
-     * those numbers, for the kernel that adds the sums up (addPartialSums in the device code).
+     * Twice the kinetic energy as partial sums per work group, for the kernel that adds them
+     * up (addPartialSums in the device code).
      */
-    unsigned int sumKineticEnergy(int numGaussians = 0);
+    void sumKineticEnergy();
     /**
      * The System's Drude groups (DrudeGroups), on the device for the Drude phases above; after
      * initialize() with CommonMRattleKernelSources::drude among its sources.
@@ -315,7 +314,7 @@ private:
     /** Each body's orientation (9 numbers, row-major) turning its reference geometry into its shape now. */
     OpenMM::ComputeArray bodyOrientation;
     OpenMM::ComputeArray velocityScale;
-    /** sumKineticEnergy's partial sums (2 per work group) and their count. */
+    /** sumKineticEnergy's partial sums (1 per work group) and their count. */
     OpenMM::ComputeArray partials, partialCount;
     /** Each body's three atoms (offsets) from which fitBodies turns its reference, and its verdict. */
     OpenMM::ComputeArray bodyFrame, misfitBodies;
@@ -349,7 +348,7 @@ private:
     int advanceBackupIndex, advanceKickTime, advanceProjectAfterKick, advanceDriftTime, advanceTolerance,
         advanceNoiseDecay, advanceNoiseScale, advanceRandomIndex, advanceProjectAtEnd, advanceResetFollows,
         advanceStepIndex, advanceScaleVelocities, projectOnlyIfNotRigid, freeVelocitiesTolerance,
-        freeVelocitiesStepIndex, collideKT, collideRandomIndex, sumsBackupIndex, sumsRandomIndex, sumsGaussians;
+        freeVelocitiesStepIndex, collideKT, collideRandomIndex, sumsBackupIndex;
 
     // The integrator's declared arrays, one device array (integratorArrays) and its backup.
     struct DeclaredArray {

@@ -96,6 +96,8 @@ protected:
     void halfStep(const RigidBodyIntegrator& integrator) override;
 
 private:
+    /** OpenMM's random float4s a CSVR half step takes: R_1 and the chi-squared draw's tries (chiSquared). */
+    static constexpr int CsvrRandomValues = 16;
     int argumentRandomIndex, argumentDof, argumentKT, argumentC;
 };
 

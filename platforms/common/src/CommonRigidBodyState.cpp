@@ -173,7 +173,7 @@ void CommonRigidBodyState::initialize(const System& system, const RigidBodyTopol
     // The factors of the next scaling: every velocity's (and the Drude groups' R), and the Drude groups' C.
     initializeMixedArray(velocityScale, {1.0, 1.0}, "mrattleVelocityScale");
     // A launch has at most getNumThreadBlocks() work groups (OpenMM's rule, both platforms).
-    initializeMixedArray(partials, vector<double>(2 * cc.getNumThreadBlocks(), 0.0), "mrattlePartialSums");
+    initializeMixedArray(partials, vector<double>(cc.getNumThreadBlocks(), 0.0), "mrattlePartialSums");
     partialCount.initialize<int>(cc, 1, "mrattlePartialCount");
     partialCount.upload(vector<int>(1, 0));
     unusableVelocities.initialize<int>(cc, 1, "mrattleUnusableVelocities");

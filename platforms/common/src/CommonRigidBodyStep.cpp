@@ -203,9 +203,6 @@ void CommonRigidBodyState::setKernelArguments() {
     sums.add(cc.getPosq());
     sums.add(correction);
     sums.add(cc.getVelm());
-    sums.add(random);
-    sumsRandomIndex = sums.add(0u);
-    sumsGaussians = sums.add(0);
     sums.add(partials);
     sums.add(partialCount);
     sumsBackupIndex = addBackupArrays(sums);
@@ -359,16 +356,11 @@ void CommonRigidBodyState::launchPass(const Pass& pass) {
     backupStepIndex = -1;  // once per step
 }
 
-unsigned int CommonRigidBodyState::sumKineticEnergy(int numGaussians) {
+void CommonRigidBodyState::sumKineticEnergy() {
     flush();
-    const unsigned int randomIndex =
-        numGaussians > 0 ? cc.getIntegrationUtilities().prepareRandomNumbers(cc.getPaddedNumAtoms()) : 0;
-    partialSums->setArg(sumsRandomIndex, randomIndex);
-    partialSums->setArg(sumsGaussians, numGaussians);
     partialSums->setArg(sumsBackupIndex, backupStepIndex);
     partialSums->execute(cc.getNumAtoms(), ReductionThreads);
     backupStepIndex = -1;
-    return randomIndex;
 }
 
 void CommonRigidBodyState::launch(ComputeKernel& kernel, int workItems, int groupSize) {

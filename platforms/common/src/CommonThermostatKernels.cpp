@@ -95,6 +95,7 @@ void CommonIntegrateMRattleBussiStepKernel::initialize(const System& system, con
     CommonRigidBodyState::Arguments arguments = state.integratorArguments(kernel);
     arguments.add(state.computeContext().getIntegrationUtilities().getRandom());
     argumentRandomIndex = arguments.add(0u);
+    arguments.add(4 * CsvrRandomValues);
     argumentDof = arguments.add(0);
     argumentKT = arguments.addMixed(0.0);
     argumentC = arguments.addMixed(0.0);
@@ -107,10 +108,11 @@ double CommonIntegrateMRattleBussiStepKernel::collisionFrequency(const RigidBody
 
 void CommonIntegrateMRattleBussiStepKernel::halfStep(const RigidBodyIntegrator& base) {
     const MRattleBussiIntegrator& integrator = static_cast<const MRattleBussiIntegrator&>(base);
-    // dof Gaussian numbers: at most 3 per atom, so one draw of 4 per padded atom suffices.
-    const int dof = state.degreesOfFreedom();
-    kernel->setArg(argumentRandomIndex, state.sumKineticEnergy(dof));
-    kernel->setArg(argumentDof, dof);
+    state.sumKineticEnergy();
+    // After the sums' flush: the queued phases' random numbers come first.
+    kernel->setArg(argumentRandomIndex,
+                   (unsigned int) state.computeContext().getIntegrationUtilities().prepareRandomNumbers(CsvrRandomValues));
+    kernel->setArg(argumentDof, state.degreesOfFreedom());
     state.setMixedArg(kernel, argumentKT, BOLTZ * integrator.getTemperature());
     state.setMixedArg(kernel, argumentC, std::exp(-integrator.getCollisionFrequency() * 0.5 * integrator.getStepSize()));
     state.launch(kernel, CommonRigidBodyState::ReductionThreads, CommonRigidBodyState::ReductionThreads);

@@ -164,7 +164,6 @@ KERNEL void drudeHardWall(STATE_ARGUMENTS, int numGroups, GLOBAL const int* REST
 KERNEL void drudeRelativeEnergies(STATE_ARGUMENTS, DRUDE_GROUP_ARGUMENTS, GLOBAL mixed* RESTRICT relative,
         GLOBAL int* RESTRICT relativeCount) {
     LOCAL mixed sums[REDUCTION_THREADS];
-    LOCAL mixed unused[REDUCTION_THREADS];
     mixed sum = 0;
     for (int group = GLOBAL_ID; group < numGroups; group += GLOBAL_SIZE) {
         const int start = groupStart[group], end = groupStart[group+1];
@@ -178,8 +177,7 @@ KERNEL void drudeRelativeEnergies(STATE_ARGUMENTS, DRUDE_GROUP_ARGUMENTS, GLOBAL
         }
     }
     sums[LOCAL_ID] = sum;
-    unused[LOCAL_ID] = 0;
-    sumOverGroup(sums, unused);
+    sumOverGroup(sums);
     if (LOCAL_ID == 0)
         relative[GROUP_ID] = sums[0];
     if (GLOBAL_ID == 0)

@@ -5,8 +5,18 @@
  * (the thermostats, thermostats.cc).
  */
 
+/** Sum an array of the work group (one value per work item) into its first element. */
+DEVICE void sumOverGroup(LOCAL_ARG mixed* sums) {
+    SYNC_THREADS;
+    for (int stride = LOCAL_SIZE/2; stride > 0; stride /= 2) {
+        if (LOCAL_ID < stride)
+            sums[LOCAL_ID] += sums[LOCAL_ID+stride];
+        SYNC_THREADS;
+    }
+}
+
 /** Sum two arrays of the work group (one value per work item) into their first elements. */
-DEVICE void sumOverGroup(LOCAL_ARG mixed* sums, LOCAL_ARG mixed* sums2) {
+DEVICE void sumTwoOverGroup(LOCAL_ARG mixed* sums, LOCAL_ARG mixed* sums2) {
     SYNC_THREADS;
     for (int stride = LOCAL_SIZE/2; stride > 0; stride /= 2) {
         if (LOCAL_ID < stride) {
@@ -18,17 +28,14 @@ DEVICE void sumOverGroup(LOCAL_ARG mixed* sums, LOCAL_ARG mixed* sums2) {
 }
 
 /**
- * Twice the kinetic energy of the massive atoms and the sum of gaussian[k]^2 for
- * 1 <= k < numGaussians (gaussian: OpenMM's random numbers from randomIndex), each work
- * group's share into partials; partialCount[0] = the number of work groups. The step's first
- * launch (backupStepIndex >= 0) also backs up the state, as advanceGroups would.
+ * Twice the kinetic energy of the massive atoms, each work group's share into partials;
+ * partialCount[0] = the number of work groups. The step's first launch (backupStepIndex >= 0)
+ * also backs up the state, as advanceGroups would.
  */
 KERNEL void kineticEnergyPartialSums(int numAtoms, GLOBAL const real4* RESTRICT posq,
-        GLOBAL const real4* RESTRICT posqCorrection, GLOBAL const mixed4* RESTRICT velm,
-        GLOBAL const float4* RESTRICT random, unsigned int randomIndex, int numGaussians, GLOBAL mixed* RESTRICT partials,
+        GLOBAL const real4* RESTRICT posqCorrection, GLOBAL const mixed4* RESTRICT velm, GLOBAL mixed* RESTRICT partials,
         GLOBAL int* RESTRICT partialCount, BACKUP_ARGUMENTS, GLOBAL const int* RESTRICT failure) {
     LOCAL mixed sums[REDUCTION_THREADS];
-    LOCAL mixed squares[REDUCTION_THREADS];
     const bool backup = backupStepIndex >= 0 && !skipAfterFailure(failure[0], backupStepIndex);
     if (backup)
         backupIntegratorArrays(integratorArrays, integratorBackup, integratorSize);
@@ -40,31 +47,21 @@ KERNEL void kineticEnergyPartialSums(int numAtoms, GLOBAL const real4* RESTRICT 
         if (v.w != 0)
             sum += (v.x*v.x + v.y*v.y + v.z*v.z)/v.w;
     }
-    GLOBAL const float* gaussian = (GLOBAL const float*) (random + randomIndex);
-    mixed square = 0;
-    for (int k = 1 + GLOBAL_ID; k < numGaussians; k += GLOBAL_SIZE)
-        square += (mixed) gaussian[k]*gaussian[k];
     sums[LOCAL_ID] = sum;
-    squares[LOCAL_ID] = square;
-    sumOverGroup(sums, squares);
-    if (LOCAL_ID == 0) {
-        partials[2*GROUP_ID] = sums[0];
-        partials[2*GROUP_ID+1] = squares[0];
-    }
+    sumOverGroup(sums);
+    if (LOCAL_ID == 0)
+        partials[GROUP_ID] = sums[0];
     if (GLOBAL_ID == 0)
         partialCount[0] = NUM_GROUPS;
 }
 
-/** The partial sums added up by one work group, into sums[0] and squares[0]. */
+/** The partial sums added up by one work group, into sums[0]. */
 DEVICE void addPartialSums(GLOBAL const mixed* RESTRICT partials, GLOBAL const int* RESTRICT partialCount,
-        LOCAL_ARG mixed* sums, LOCAL_ARG mixed* squares) {
-    mixed sum = 0, square = 0;
+        LOCAL_ARG mixed* sums) {
+    mixed sum = 0;
     const int count = partialCount[0];
-    for (int g = LOCAL_ID; g < count; g += LOCAL_SIZE) {
-        sum += partials[2*g];
-        square += partials[2*g+1];
-    }
+    for (int g = LOCAL_ID; g < count; g += LOCAL_SIZE)
+        sum += partials[g];
     sums[LOCAL_ID] = sum;
-    squares[LOCAL_ID] = square;
-    sumOverGroup(sums, squares);
+    sumOverGroup(sums);
 }

@@ -75,8 +75,7 @@ KERNEL void noseHooverChainHalfStep(STATE_ARGUMENTS, int chainLength, int positi
         GLOBAL const mixed* RESTRICT weights, int numWeights, int numMTS, mixed dof, mixed kT, mixed frequency,
         mixed halfStep) {
     LOCAL mixed sums[REDUCTION_THREADS];
-    LOCAL mixed unused[REDUCTION_THREADS];
-    addPartialSums(partials, partialCount, sums, unused);
+    addPartialSums(partials, partialCount, sums);
     if (LOCAL_ID != 0 || failure[0] != 0)
         return;
     const mixed scale = propagateChain(integratorArrays + positionOffset, integratorArrays + velocityOffset, chainLength,
@@ -101,13 +100,13 @@ KERNEL void drudeNoseHooverChainsHalfStep(STATE_ARGUMENTS, GLOBAL const mixed* R
     mixed sum = 0, relativeSum = 0;
     const int count = partialCount[0];
     for (int g = LOCAL_ID; g < count; g += LOCAL_SIZE)
-        sum += partials[2*g];
+        sum += partials[g];
     const int relativeGroups = relativeCount[0];
     for (int g = LOCAL_ID; g < relativeGroups; g += LOCAL_SIZE)
         relativeSum += relative[g];
     sums[LOCAL_ID] = sum;
     relativeSums[LOCAL_ID] = relativeSum;
-    sumOverGroup(sums, relativeSums);
+    sumTwoOverGroup(sums, relativeSums);
     if (LOCAL_ID != 0 || failure[0] != 0)
         return;
     mixed factor = 1, drudeFactor = 1;
@@ -123,26 +122,57 @@ KERNEL void drudeNoseHooverChainsHalfStep(STATE_ARGUMENTS, GLOBAL const mixed* R
 }
 
 /**
+ * The sum of n squared standard normals from the Gaussian numbers g[0 .. count): 2 Gamma(n/2, 1)
+ * for even n, one g^2 more for odd n (as RigidBodyThermostats::csvrScale draws it), the Gamma
+ * variable by Marsaglia and Tsang's rejection (ACM TOMS 26, 363, 2000), two numbers a try (the
+ * second made uniform), each accepted with probability above 0.95. Should every try fail (below
+ * 1e-18 with 62 numbers), n, its mean.
+ */
+DEVICE mixed chiSquared(int n, GLOBAL const float* RESTRICT g, int count) {
+    mixed sum = 0;
+    int next = 0;
+    if (n % 2 == 1) {
+        sum = (mixed) g[0]*g[0];
+        next = 1;
+        n--;
+    }
+    if (n == 0)
+        return sum;
+    const mixed d = 0.5f*n - (mixed) 1/3, c = 1/sqrt(9*d);
+    for (; next + 1 < count; next += 2) {
+        const mixed x = g[next], t = c*x;
+        if (t <= -1)
+            continue;
+        const mixed u = 0.5f*erfc(-g[next+1]*0.70710678f), v = (1 + t)*(1 + t)*(1 + t);
+        // log(v) - v + 1 with its leading terms cancelled exactly: -3t - 3t^2 - t^3 + 3 log1p(t).
+        if (u < 1 - 0.0331f*x*x*x*x || log(u) < 0.5f*x*x + d*(3*(log1p(t) - t) - 3*t*t - t*t*t))
+            return sum + 2*d*v;
+    }
+    return sum + n;
+}
+
+/**
  * Half a step of stochastic velocity rescaling (Bussi, Donadio and Parrinello 2007): the new
- * kinetic energy drawn exactly, with R_1 (gaussian[0]) and the dof - 1 other squared standard
- * normals (their sum, from the partial sums) from OpenMM's device Gaussian numbers;
- * c = exp(-frequency * halfStep). Adds the change of kinetic energy to the work
+ * kinetic energy drawn exactly, with R_1 (gaussian[0]) and the sum of the dof - 1 other squared
+ * standard normals (chiSquared) from numGaussians of OpenMM's device Gaussian numbers at
+ * randomIndex; c = exp(-frequency * halfStep). Adds the change of kinetic energy to the work
  * (integratorArrays[workOffset]); the factor into velocityScale[0]. One work group.
  */
 KERNEL void stochasticRescalingHalfStep(STATE_ARGUMENTS, GLOBAL const float4* RESTRICT random, unsigned int randomIndex,
-        int dof, mixed kT, mixed c, int workOffset) {
+        int numGaussians, int dof, mixed kT, mixed c, int workOffset) {
     LOCAL mixed sums[REDUCTION_THREADS];
-    LOCAL mixed squares[REDUCTION_THREADS];
-    addPartialSums(partials, partialCount, sums, squares);
+    addPartialSums(partials, partialCount, sums);
     if (LOCAL_ID != 0 || failure[0] != 0)
         return;
     GLOBAL mixed* work = integratorArrays + workOffset;
     const mixed kinetic = 0.5f*sums[0], meanKinetic = 0.5f*dof*kT;
     mixed alpha = 1;
     if (kinetic > 0 && dof > 0) {
-        const mixed r1 = ((GLOBAL const float*) (random + randomIndex))[0];
+        GLOBAL const float* gaussian = (GLOBAL const float*) (random + randomIndex);
+        const mixed r1 = gaussian[0];
+        const mixed others = chiSquared(dof - 1, gaussian + 1, numGaussians - 1);
         const mixed along = sqrt(c*kinetic) + r1*sqrt((1-c)*meanKinetic/dof);
-        const mixed newKinetic = along*along + (1-c)*meanKinetic*squares[0]/dof;
+        const mixed newKinetic = along*along + (1-c)*meanKinetic*others/dof;
         alpha = sqrt(newKinetic/kinetic);
         if (along < 0)
             alpha = -alpha;
