@@ -37,6 +37,7 @@
 #include "openmm/serialization/XmlSerializer.h"
 #include <gtest/gtest.h>
 #include <algorithm>
+#include <cctype>
 #include <cmath>
 #include <functional>
 #include <iostream>
@@ -262,6 +263,13 @@ vector<std::unique_ptr<Context> > runEach(const vector<RigidBodyIntegrator*>& in
         integrator->step(200);
     }
     return contexts;
+}
+
+/** Whether message holds what followed by the index (and no further digit). */
+bool namesParticle(const string& message, const string& what, int index) {
+    const string text = what + std::to_string(index);
+    const size_t at = message.find(text);
+    return at != string::npos && (at + text.size() == message.size() || !std::isdigit(message[at + text.size()]));
 }
 
 vector<Vec3> positionsOf(Context& context) {
@@ -802,7 +810,8 @@ TEST(DrudeReordering, DrudeGroupsFollowTheDevicesReorderingsAsOnReference) {
     // order only relabel the groups: skipping the upload of drudePairAtoms (or of every Drude
     // list) at a reordering passes, bit for bit. A list that pairs a group with another's
     // Drude pairs (drudePairAtoms rotated by one pair at each reordering) fails: 0.04 nm from
-    // Reference and bodies off by 1e-4 nm.
+    // Reference and bodies off by 1e-4 nm. Then a Drude particle set 3.5 walls from its core
+    // fails the next step, and the message names it and its core by System index.
     const double wall = 0.003, cutoff = 0.55;
     const int steps = 260;
     DrudeSystem d = drudeWaters(22, 5, 0.4, cutoff);
@@ -839,6 +848,14 @@ TEST(DrudeReordering, DrudeGroupsFollowTheDevicesReorderingsAsOnReference) {
         EXPECT_LT(deviation, 1e-7) << name;
         EXPECT_LE(farthestDrude(d, positions), wall * (1 + 1e-9)) << name;
         EXPECT_LT(worstBodyChange(d, d.positions, positions), 1e-10) << name;
+        // A wall failure found after the reorderings names the pair by System indices.
+        const std::pair<int, int> pair = d.pairs[7];
+        vector<Vec3> moved = positions;
+        moved[pair.first] = moved[pair.second] + Vec3(3.5 * wall, 0, 0);
+        context->setPositions(moved);
+        const string message = messageOf([&] { onDevice->step(1); });
+        EXPECT_TRUE(namesParticle(message, "Drude particle ", pair.first)) << name << ": " << message;
+        EXPECT_TRUE(namesParticle(message, "core ", pair.second)) << name << ": " << message;
         ran++;
     }
     // Device platforms only (Reference is the yardstick): a build or machine without one has nothing to compare.
