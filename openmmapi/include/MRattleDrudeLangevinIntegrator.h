@@ -11,10 +11,10 @@ namespace MRattlePlugin {
  * the constructor and settings of OpenMM's DrudeLangevinIntegrator. The step is
  * MRattleLangevinIntegrator's (LangevinMiddle with M-RATTLE); its noise step splits the
  * velocities of each body with the Drude particles of its cores, and of each free core with
- * its Drude particles, into the group's rigid motion (translation for a free pair), coupled
- * at the temperature with the friction, and the Drude particles' motion relative to it (zero
- * momentum and angular momentum), coupled at the Drude temperature with the Drude friction
- * (docs/ALGORITHM.md). For a free pair this is OpenMM's centre-of-mass and relative split.
+ * its Drude particles, into the group's rigid motion with each Drude particle carried at its
+ * core's velocity (translation for a free pair), coupled at the temperature with the friction,
+ * and each Drude particle's motion relative to its core (zero total momentum), coupled at the
+ * Drude temperature with the Drude friction (docs/ALGORITHM.md). For a free pair this is OpenMM's centre-of-mass and relative split.
  * Every other particle is at the temperature, as in MRattleLangevinIntegrator.
  *
  * Drude particles are never members of a body (a Context whose bodies hold one is refused,
@@ -74,7 +74,7 @@ public:
         randomNumberSeed = seed;
     }
     /**
-     * The instantaneous temperature of the Drude particles' motion relative to their groups,
+     * The instantaneous temperature of the Drude particles' motion relative to their cores,
      * 2 KE_C / (3 n_drude k_B), in Kelvin, from the Context's positions and velocities (0
      * without Drude particles).
      */
@@ -87,7 +87,7 @@ public:
     double computeBodyTemperature();
     /**
      * RigidBodyIntegrator's draw at temperature, then each Drude particle's motion relative to
-     * its group (KE_C) scaled to getDrudeTemperature(), as OpenMM's Drude integrators draw it.
+     * its core (KE_C) scaled to getDrudeTemperature(), as OpenMM's Drude integrators draw it.
      */
     std::vector<OpenMM::Vec3> getVelocitiesForTemperature(const OpenMM::System& system, double temperature,
                                                           int randomSeed) const override;

@@ -13,7 +13,7 @@ namespace MRattlePlugin {
  * thermostats) with two chains: one coupled to the kinetic energy KE_R of the Drude groups'
  * rigid motion and of every other particle (DrudeGroups: each body with the Drude particles
  * of its cores, each free core with its Drude particles), at the temperature, the other to
- * the kinetic energy KE_C of the Drude particles' motion relative to their groups (3 degrees
+ * the kinetic energy KE_C of the Drude particles' motion relative to their cores (3 degrees
  * of freedom per Drude particle), at the Drude temperature. KE = KE_R + KE_C exactly; a half
  * step scales the rigid part of the velocities by the first chain's factor and the relative
  * part by the second's (docs/ALGORITHM.md).
@@ -85,7 +85,7 @@ public:
         return numYoshidaSuzuki;
     }
     /**
-     * The instantaneous temperature of the Drude particles' motion relative to their groups,
+     * The instantaneous temperature of the Drude particles' motion relative to their cores,
      * 2 KE_C / (3 n_drude k_B), in Kelvin (0 without Drude particles).
      */
     double computeDrudeTemperature();
@@ -96,7 +96,7 @@ public:
     double computeBodyTemperature();
     /**
      * RigidBodyIntegrator's draw at temperature, then each Drude particle's motion relative to
-     * its group (KE_C) scaled to getDrudeTemperature(), as OpenMM's Drude integrators draw it.
+     * its core (KE_C) scaled to getDrudeTemperature(), as OpenMM's Drude integrators draw it.
      */
     std::vector<OpenMM::Vec3> getVelocitiesForTemperature(const OpenMM::System& system, double temperature,
                                                           int randomSeed) const override;

@@ -88,7 +88,7 @@ public:
     void bounceDrudes(const DrudeGroups& groups, double maxDistance, double drudeTemperature, double h);
     /**
      * The step's kinetic energy split by the Drude groups: relative = KE_C (the Drude
-     * particles' motion relative to their groups), rigid = KE - KE_C (the groups' rigid
+     * particles' motion relative to their cores), rigid = KE - KE_C (the groups' rigid
      * motion and every other particle), in kJ/mol.
      */
     void computeDrudeKineticEnergies(const DrudeGroups& groups, double& rigid, double& relative);

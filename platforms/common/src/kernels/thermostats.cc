@@ -123,10 +123,10 @@ KERNEL void drudeNoseHooverChainsHalfStep(STATE_ARGUMENTS, GLOBAL const mixed* R
 
 /**
  * The sum of n squared standard normals from the Gaussian numbers g[0 .. count): 2 Gamma(n/2, 1)
- * for even n, one g^2 more for odd n (as RigidBodyThermostats::csvrScale draws it), the Gamma
+ * for even n, one g^2 more for odd n (csvrScale's 2 Gamma(n/2, 1) in distribution), the Gamma
  * variable by Marsaglia and Tsang's rejection (ACM TOMS 26, 363, 2000), two numbers a try (the
  * second made uniform), each accepted with probability above 0.95. Should every try fail (below
- * 1e-18 with 62 numbers), n, its mean.
+ * 1e-30 with 62 numbers), n, its mean.
  */
 DEVICE mixed chiSquared(int n, GLOBAL const float* RESTRICT g, int count) {
     mixed sum = 0;
