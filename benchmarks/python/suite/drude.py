@@ -87,11 +87,19 @@ class Temperatures:
         return 2 * (total - relative) / (self.dof * KB), 2 * relative / (3 * len(self.pairs) * KB)
 
 
+def seed_barostat(system, seed):
+    """The System's MonteCarloBarostat (if any) drawn from seed in the next Context: reproducible NPT runs."""
+    for force in system.getForces():
+        if isinstance(force, openmm.MonteCarloBarostat):
+            force.setRandomNumberSeed(seed)
+
+
 def replica(name, model, start, seed, s, npt):
     """One replica's means: from the common start, new velocities (seed; drawn OpenMM's way for both sides: the
     plugin's setVelocitiesToTemperature gives the Drude particles the main temperature), its own equilibration."""
     system, pairs, bodies, temperatures = model
     it = integrator(name, bodies, seed, s['step'])
+    seed_barostat(system, seed)
     c = context(system, it, start[0], None, 'CPU', 1)
     c.setPeriodicBoxVectors(*start[1])
     c.setVelocities(temperatures.thermal(start[0], seed))
@@ -116,6 +124,7 @@ def replica(name, model, start, seed, s, npt):
 def equilibrate(system, positions, steps, seed=1):
     """OpenMM's DrudeLangevin + SETTLE from positions (minimized first): the common start (positions, box)."""
     it = integrator(('Langevin', False), [], seed)
+    seed_barostat(system, seed)
     c = context(system, it, positions, None, 'CPU', 1)
     openmm.LocalEnergyMinimizer.minimize(c, 10.0, 500)
     c.setVelocitiesToTemperature(TEMPERATURE * unit.kelvin, seed)
@@ -155,7 +164,8 @@ def run(quick, out, log):
              'Modeller.addExtraParticles, PME 0.8 nm), 1 fs, 300 K, Drude 1 K, maxDrudeDistance %g nm, CPU platform, '
              '1 thread. Each integrator: %d replicas (seeds and starting velocities) from one start after %g ps of '
              'OpenMM\'s DrudeLangevin; each %g ps of its own equilibration, then %g ps NVT (sampled every %d fs), and '
-             'the same from an NPT start (MonteCarloBarostat, 1 bar, every 25 steps) for %g ps NPT. Means +- standard '
+             'the same from an NPT start (MonteCarloBarostat, 1 bar, every 25 steps, seeded as the replica) for %g ps '
+             'NPT. Means +- standard '
              'errors over the replicas. Temperatures: one formula (OpenMM 8\'s computeSystemTemperature() and '
              'computeDrudeTemperature()) for both sides, from the velocities the integrators keep. Cost: median of %d '
              'interleaved batches '
