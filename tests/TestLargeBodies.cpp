@@ -4,13 +4,16 @@
  * for every integrator on every device platform: in double precision the step (Langevin's
  * friction included, at 0 K) follows Reference's and keeps the velocities rigid, and
  * velocities set from the host are projected as Reference projects them (rigid ones kept bit
- * for bit); in mixed precision, where each body is rebuilt from its reference geometry, the
- * bodies stay rigid; a failed step puts every atom back at its start (the step's first launch
+ * for bit) and split into translation and rotation as Reference splits them; Andersen
+ * collisions re-draw a large body whole; in mixed precision, where each body is rebuilt from
+ * its reference geometry, the bodies stay rigid; a failed step puts every atom back at its start (the step's first launch
  * backs up the large bodies too when the flag is already set), also when a large body's own
  * work group fails it.
  */
 #include "TestSupport.h"
+#include "openmm/AndersenThermostat.h"
 #include "openmm/CustomExternalForce.h"
+#include "openmm/reference/SimTKOpenMMRealType.h"
 #include <gtest/gtest.h>
 #include <algorithm>
 #include <cmath>
@@ -124,6 +127,11 @@ TEST_P(LargeBodies, FollowReferenceInDoublePrecision) {
     device->setVelocities(start);
     const vector<Vec3> kept = device->getState(State::Velocities).getVelocities();
     EXPECT_EQ(0.0, maxDeviation(start, kept)) << "rigid velocities set on the device are kept bit for bit";
+    // The kinetic split (the large bodies' sums by a work group each) is Reference's.
+    const double translational = onReference->computeTranslationalKineticEnergy();
+    const double rotational = onReference->computeRotationalKineticEnergy();
+    EXPECT_NEAR(translational, onDevice->computeTranslationalKineticEnergy(), 1e-10 * translational);
+    EXPECT_NEAR(rotational, onDevice->computeRotationalKineticEnergy(), 1e-10 * rotational);
 
     // Velocities that are not rigid: the device's projection is Reference's.
     std::mt19937 generator(2);
@@ -233,6 +241,45 @@ TEST_P(LargeBodies, AStepTooLargeForALargeBodysRotationIsUndone) {
     EXPECT_EQ(2, state.getStepCount());
     EXPECT_EQ(0.0, maxDeviation(before.getPositions(), state.getPositions()));
     EXPECT_EQ(0.0, maxDeviation(before.getVelocities(), state.getVelocities()));
+}
+
+TEST_P(LargeBodies, AndersenCollisionsRedrawLargeBodiesWhole) {
+    // Every atom collides about every step (1000/ps, 1 fs): each body is re-drawn whole and made
+    // rigid, so its kinetic energy is kT/2 times a chi-squared of 6 degrees of freedom, mean 3 kT.
+    // The collisions are the same code for every integrator: the plain one checks them.
+    if (GetParam().integrator != "MRattle")
+        GTEST_SKIP() << "collisions are the integrators' common code: MRattle checks them";
+    LargeBodySystem s = largeBodySystem();
+    const double temperature = 300, kT = BOLTZ * temperature;
+    s.system.addForce(new AndersenThermostat(temperature, 1000));
+    std::unique_ptr<RigidBodyIntegrator> integrator = makeIntegrator(0.001);
+    std::unique_ptr<Context> device = contextOf(s, *integrator, GetParam().platform, "double");
+    device->setVelocities(vector<Vec3>(s.positions.size()));
+    vector<double> ratios;  // each large body's kinetic energy over 3 kT, after each step
+    double rate = 0;
+    for (int step = 0; step < 200; step++) {
+        integrator->step(1);
+        const State state = device->getState(State::Velocities | State::Positions);
+        rate = std::max(rate, largestDistanceRate(state, s.bodies));
+        for (int b = 0; b < NumLargeBodies; b++) {
+            double energy = 0;
+            for (int atom : s.bodies[b])
+                energy += 0.5 * s.system.getParticleMass(atom) * state.getVelocities()[atom].dot(state.getVelocities()[atom]);
+            ratios.push_back(energy / (3 * kT));
+        }
+    }
+    double mean = 0, variance = 0;
+    for (double r : ratios)
+        mean += r / ratios.size();
+    for (double r : ratios)
+        variance += (r - mean) * (r - mean) / (ratios.size() - 1);
+    const double error = std::sqrt(variance / ratios.size());
+    std::cout << GetParam().platform << ": large bodies' kinetic energy over 3 kT " << mean << " +- " << error
+              << ", variance " << variance << " (" << ratios.size() << " samples), distances changing at " << rate
+              << " nm/ps" << std::endl;
+    EXPECT_NEAR(1.0, mean, 4 * error);
+    EXPECT_NEAR(1.0 / 3, variance, 0.1) << "chi-squared of 6 degrees of freedom over 6: variance 1/3";
+    EXPECT_LT(rate, 1e-9);
 }
 
 INSTANTIATE_TEST_SUITE_P(Devices, LargeBodies, ::testing::ValuesIn(deviceConfigs()), configName);

@@ -170,8 +170,9 @@ public:
     /** Steps between lazy copies of the failure flag to the host. */
     static constexpr int FlagCopyInterval = 16;
     /**
-     * Bodies of more atoms than this (not linear) are moved by a work group of LargeBodyThreads
-     * each (kernels/largeBodies.cc), their sums reduced in local memory; smaller ones by one work item.
+     * Bodies of more atoms than this (not linear) are moved, projected and collided by a work
+     * group of LargeBodyThreads each (kernels/largeBodies.cc, collisions.cc), their sums reduced in
+     * local memory (their kinetic energies too, linear or not); smaller ones by one work item.
      */
     static constexpr int LargeBodyAtoms = 64;
     static constexpr int LargeBodyThreads = 64;
@@ -329,8 +330,8 @@ private:
     OpenMM::ComputeArray largeBodies;
     int numLargeBodies = 0;
     OpenMM::ComputeKernel advanceLargeBodies, projectLargeBodies;
-    OpenMM::ComputeKernel advanceGroups, projectBodies, constrainFreeVelocities, collideBodies, partialSums,
-        bodyKineticEnergy, findUnusable;
+    OpenMM::ComputeKernel advanceGroups, projectBodies, constrainFreeVelocities, collideBodies, collideLargeBodies,
+        partialSums, bodyKineticEnergy, largeBodyKineticEnergy, findUnusable;
     // The Drude groups (setDrudeGroups, CommonRigidBodyDrude.cpp): System indices, group-major
     // (a group's atoms, then its Drude particles), where each is placed in R (itself, a Drude particle's
     // core), the atoms in no group, (Drude, core) pairs group-major.

@@ -200,9 +200,11 @@ void CommonRigidBodyState::initialize(const System& system, const RigidBodyTopol
     findUnusable = stepProgram->createKernel("findUnusableVelocities");
     findUnusable->addArg(cc.getNumAtoms());
     findUnusable->addArg(cc.getVelm());
-    findUnusable->addArg(unusableVelocities);
-    if (hasAndersen)
+    findUnusable->addArg(screenVerdict);
+    if (hasAndersen) {
         collideBodies = stepProgram->createKernel("collideBodies");
+        collideLargeBodies = stepProgram->createKernel("collideLargeBodies");
+    }
 }
 
 void CommonRigidBodyState::initRandomNumbers(int seed) {
@@ -317,8 +319,18 @@ void CommonRigidBodyState::computeKineticEnergies(ContextImpl& context, double& 
             arguments.add(bodyAtoms);
             arguments.add(cc.getVelm());
             arguments.add(bodyEnergies);
+            largeBodyKineticEnergy = stepProgram->createKernel("largeBodyKineticEnergy");
+            Arguments large(largeBodyKineticEnergy, doubleMixed());
+            large.add(largeBodies);
+            large.add(numLargeBodies);
+            large.add(bodyStart);
+            large.add(bodyAtoms);
+            large.add(cc.getVelm());
+            large.add(bodyEnergies);
         }
         bodyKineticEnergy->execute(numBodies);
+        if (numLargeBodies > 0)
+            largeBodyKineticEnergy->execute(numLargeBodies * LargeBodyThreads, LargeBodyThreads);
         const vector<double> values = downloadAsDouble(bodyEnergies);
         for (int b = 0; b < numBodies; b++) {
             translational += values[3 * b];

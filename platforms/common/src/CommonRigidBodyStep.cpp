@@ -86,7 +86,8 @@ std::string CommonRigidBodyState::programSource(const std::string& sources) {
     return CommonMRattleKernelSources::bodyMath + CommonMRattleKernelSources::rotation + CommonMRattleKernelSources::step +
            CommonMRattleKernelSources::freeConstraints + CommonMRattleKernelSources::projection +
            CommonMRattleKernelSources::advance + CommonMRattleKernelSources::largeBodies +
-           CommonMRattleKernelSources::reduction + CommonMRattleKernelSources::fitReference + sources;
+           CommonMRattleKernelSources::reduction + CommonMRattleKernelSources::fitReference +
+           CommonMRattleKernelSources::bodyKineticEnergy + sources;
 }
 
 CommonRigidBodyState::Arguments CommonRigidBodyState::arguments(ComputeKernel& kernel) {
@@ -208,14 +209,19 @@ void CommonRigidBodyState::setKernelArguments() {
     sumsBackupIndex = addBackupArrays(sums);
     sums.add(failure);
 
-    if (hasAndersen) {
-        Arguments collide = arguments(collideBodies);
-        addBodyArguments(collide);
-        collideKT = collide.addMixed(0.0);
-        collide.add(integration.getRandom());
-        collideRandomIndex = collide.add(0u);
-        collide.add(failure);
-    }
+    if (hasAndersen)
+        for (ComputeKernel* kernel : {&collideBodies, &collideLargeBodies}) {
+            Arguments collide = arguments(*kernel);
+            addBodyArguments(collide);
+            collideKT = collide.addMixed(0.0);
+            collide.add(integration.getRandom());
+            collideRandomIndex = collide.add(0u);
+            collide.add(failure);
+            if (kernel == &collideLargeBodies) {
+                collide.add(largeBodies);
+                collide.add(numLargeBodies);
+            }
+        }
     if (hasDrudeGroups)
         setDrudeKernelArguments();
     argumentsSet = true;
@@ -229,10 +235,15 @@ void CommonRigidBodyState::beginStep(ContextImpl& context, const RigidBodyIntegr
     tolerance = integrator.getConstraintTolerance();
     if (hasAndersen && numBodies > 0) {
         // The thermostat (updateContextState) re-drew single atoms: re-draw their whole bodies.
-        IntegrationUtilities& integration = cc.getIntegrationUtilities();
-        setMixedArg(collideBodies, collideKT, BOLTZ * context.getParameter(AndersenThermostat::Temperature()));
-        collideBodies->setArg(collideRandomIndex, (unsigned int) integration.prepareRandomNumbers(cc.getPaddedNumAtoms()));
+        const double kT = BOLTZ * context.getParameter(AndersenThermostat::Temperature());
+        const unsigned int randomIndex = cc.getIntegrationUtilities().prepareRandomNumbers(cc.getPaddedNumAtoms());
+        for (ComputeKernel* kernel : {&collideBodies, &collideLargeBodies}) {
+            setMixedArg(*kernel, collideKT, kT);
+            (*kernel)->setArg(collideRandomIndex, randomIndex);
+        }
         collideBodies->execute(numBodies);
+        if (numLargeBodies > 0)
+            collideLargeBodies->execute(numLargeBodies * LargeBodyThreads, LargeBodyThreads);
         projectNow(tolerance, true);
     }
     // The step's first launch backs up the state (after the collisions: they are the step's start).
