@@ -127,6 +127,47 @@ inline DrudeSystem drudeWaters(int numWaters, int numIons, double spacing, doubl
     return d;
 }
 
+/**
+ * Adds numBlobs rigid bodies of `atoms` uncharged atoms in a flattened ball 0.8 nm across, 2 nm
+ * apart along x from 2.5 nm, with a Drude particle 0.003-0.006 nm off every tenth atom: each a
+ * Drude group of more than the device's large-body threshold (64 particles) for atoms >= 60.
+ */
+inline void addPolarizableBlobs(DrudeSystem& d, int numBlobs, int atoms) {
+    NonbondedForce* nonbonded = nullptr;
+    DrudeForce* drude = nullptr;
+    for (int f = 0; f < d.system.getNumForces(); f++) {
+        if (NonbondedForce* n = dynamic_cast<NonbondedForce*>(&d.system.getForce(f)))
+            nonbonded = n;
+        if (DrudeForce* n = dynamic_cast<DrudeForce*>(&d.system.getForce(f)))
+            drude = n;
+    }
+    unsigned int state = 12345;
+    auto uniform = [&]() {  // in [-1, 1): the same on every platform and compiler
+        state = state * 1103515245u + 12345u;
+        return ((state >> 8) & 0xFFFF) / 32768.0 - 1.0;
+    };
+    for (int b = 0; b < numBlobs; b++) {
+        vector<int> body;
+        const Vec3 center(2.5 + 2.0 * b, 0, 0);
+        for (int k = 0; k < atoms; k++) {
+            const int atom = d.system.addParticle(12.0 + 4.0 * (k % 2));
+            nonbonded->addParticle(0.0, 1.0, 0.0);
+            const Vec3 x = center + Vec3(uniform(), uniform(), 0.5 * uniform()) * 0.4;
+            d.positions.push_back(x);
+            body.push_back(atom);
+            if (k % 10 == 0) {
+                const int particle = d.system.addParticle(0.4);
+                nonbonded->addParticle(0.0, 1.0, 0.0);
+                const Vec3 offset(uniform(), uniform(), uniform());
+                d.positions.push_back(x + offset * (0.0045 + 0.0015 * uniform()) / std::sqrt(offset.dot(offset)));
+                drude->addParticle(particle, atom, -1, -1, -1, -1.71636, 0.00097825, 1.0, 1.0);
+                d.pairs.push_back({particle, atom});
+            }
+        }
+        d.bodies.push_back(body);
+    }
+}
+
 /** A Context of the system on a platform with these properties, its waters declared as bodies to the integrator. */
 inline std::unique_ptr<Context> platformContext(const DrudeSystem& d, RigidBodyIntegrator& integrator,
                                                 const std::string& platformName,

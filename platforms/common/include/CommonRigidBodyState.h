@@ -217,6 +217,8 @@ private:
     void setDrudeKernelArguments();
     /** DRUDE_GROUP_ARGUMENTS of the device code. */
     void addDrudeGroupArguments(Arguments& arguments);
+    /** A *LargeGroups Drude kernel, a work group per large group, where there are any. */
+    void launchOnLargeDrudeGroups(OpenMM::ComputeKernel& kernel);
     /** BODY_ARGUMENTS of the device code. */
     void addBodyArguments(Arguments& arguments);
     /** BACKUP_ARGUMENTS of the device code; returns the index of backupStepIndex. */
@@ -345,7 +347,11 @@ private:
     /** The hard wall's maxDrudeDistance at the last bounceDrudes, for a failure's message. */
     double drudeWallDistance = 0;
     OpenMM::ComputeKernel drudeNoise, drudeHardWall, drudeRelativeEnergy, drudeScale;
-    int drudeNoiseArguments, drudeNoiseRandomIndex, drudeWallArguments;
+    /** The groups of bodies of more than LargeBodyAtoms particles (group indices), a work group each, and their KE_C. */
+    OpenMM::ComputeArray largeDrudeGroups, largeDrudeRelative;
+    int numLargeDrudeGroups = 0;
+    OpenMM::ComputeKernel drudeNoiseLarge, drudeHardWallLarge, drudeRelativeEnergyLarge, drudeScaleLarge;
+    int drudeNoiseArguments, drudeNoiseRandomIndex, drudeWallArguments, drudeWallLargeArguments;
     int advanceBackupIndex, advanceKickTime, advanceProjectAfterKick, advanceDriftTime, advanceTolerance,
         advanceNoiseDecay, advanceNoiseScale, advanceRandomIndex, advanceProjectAtEnd, advanceResetFollows,
         advanceStepIndex, advanceScaleVelocities, projectOnlyIfNotRigid, freeVelocitiesTolerance,

@@ -4,7 +4,7 @@
  * motion (each Drude particle at its core) and its Drude particles' motion relative to their cores, the hard wall, the kinetic energy of the
  * relative motion and the scaling of the two parts by two factors. One work item per Drude
  * group (a body with the Drude particles of its cores, or a free core with its own) and per
- * atom in no group.
+ * atom in no group; a work group for a group of more than LargeBodyAtoms particles with a body.
  */
 #include "CommonRigidBodyState.h"
 #include "openmm/common/IntegrationUtilities.h"
@@ -16,7 +16,7 @@ using namespace OpenMM;
 using std::vector;
 
 void CommonRigidBodyState::setDrudeGroups(const DrudeGroups& groups) {
-    vector<int> groupStarts = {0}, rotates, pairStarts = {0};
+    vector<int> groupStarts = {0}, rotates, pairStarts = {0}, large;
     vector<bool> grouped(cc.getNumAtoms(), false);
     // A group's Drude particles are its last particles, in the DrudeForce's order (DrudeGroups).
     std::map<int, int> coreOf;
@@ -35,6 +35,8 @@ void CommonRigidBodyState::setDrudeGroups(const DrudeGroups& groups) {
         groupStarts.push_back(systemDrudeGroupAtoms.size());
         pairStarts.push_back(systemDrudePairAtoms.size() / 2);
         rotates.push_back(group.rotates ? 1 : 0);
+        if (group.rotates && group.particles.size() > LargeBodyAtoms)
+            large.push_back(rotates.size() - 1);
     }
     for (int atom = 0; atom < cc.getNumAtoms(); atom++)
         if (!grouped[atom])
@@ -52,6 +54,11 @@ void CommonRigidBodyState::setDrudeGroups(const DrudeGroups& groups) {
     drudePairStart.initialize<int>(cc, pairStarts.size(), "mrattleDrudePairStart");
     drudePairStart.upload(pairStarts);
     drudePairAtoms.initialize<int>(cc, std::max<size_t>(2, systemDrudePairAtoms.size()), "mrattleDrudePairAtoms");
+    numLargeDrudeGroups = large.size();
+    large.resize(std::max<size_t>(1, large.size()), 0);
+    largeDrudeGroups.initialize<int>(cc, large.size(), "mrattleLargeDrudeGroups");
+    largeDrudeGroups.upload(large);
+    initializeMixedArray(largeDrudeRelative, vector<double>(large.size(), 0.0), "mrattleLargeDrudeRelative");
     drudeFailedPair.initialize<int>(cc, 1, "mrattleDrudeFailedPair");
     drudeFailedPair.upload(vector<int>(1, 0));
     drudeNoiseField.initialize(cc, cc.getPaddedNumAtoms(), doubleMixed() ? sizeof(mm_double4) : sizeof(mm_float4),
@@ -64,6 +71,10 @@ void CommonRigidBodyState::setDrudeGroups(const DrudeGroups& groups) {
     drudeHardWall = stepProgram->createKernel("drudeHardWall");
     drudeRelativeEnergy = stepProgram->createKernel("drudeRelativeEnergies");
     drudeScale = stepProgram->createKernel("scaleDrudeVelocities");
+    drudeNoiseLarge = stepProgram->createKernel("drudeNoiseLargeGroups");
+    drudeHardWallLarge = stepProgram->createKernel("drudeHardWallLargeGroups");
+    drudeRelativeEnergyLarge = stepProgram->createKernel("drudeRelativeEnergiesLargeGroups");
+    drudeScaleLarge = stepProgram->createKernel("scaleDrudeVelocitiesLargeGroups");
     hasDrudeGroups = true;
 }
 
@@ -84,36 +95,70 @@ void CommonRigidBodyState::setDrudeKernelArguments() {
     // OpenMM's device random numbers where something made them; else any float4-sized array, unread.
     ArrayInterface& random = hasRandomNumbers ? cc.getIntegrationUtilities().getRandom()
                                               : static_cast<ArrayInterface&>(velmBackup);
-    Arguments noise = integratorArguments(drudeNoise);
-    addDrudeGroupArguments(noise);
-    noise.add(drudeNoiseField);
-    drudeNoiseArguments = noise.addMixed(1.0);
-    noise.addMixed(0.0);
-    noise.addMixed(1.0);
-    noise.addMixed(0.0);
-    noise.add(random);
-    drudeNoiseRandomIndex = noise.add(0u);
+    // Each *Large kernel takes its small one's arguments (the wall's: the same after the first)
+    // and the large groups' list last.
+    auto addLargeGroups = [&](Arguments& arguments) {
+        arguments.add(largeDrudeGroups);
+        arguments.add(numLargeDrudeGroups);
+    };
+    for (ComputeKernel* kernel : {&drudeNoise, &drudeNoiseLarge}) {
+        Arguments noise = integratorArguments(*kernel);
+        addDrudeGroupArguments(noise);
+        noise.add(drudeNoiseField);
+        drudeNoiseArguments = noise.addMixed(1.0);
+        noise.addMixed(0.0);
+        noise.addMixed(1.0);
+        noise.addMixed(0.0);
+        noise.add(random);
+        drudeNoiseRandomIndex = noise.add(0u);
+        if (kernel == &drudeNoiseLarge)
+            addLargeGroups(noise);
+    }
 
-    Arguments wall = integratorArguments(drudeHardWall);
-    wall.add(numDrudeGroupsOnDevice);
-    wall.add(drudePairStart);
-    wall.add(drudePairAtoms);
-    wall.add(drudeGroupRotates);
-    wall.add(drudeFailedPair);
-    wall.add(cc.getPosq());
-    wall.add(cc.getUseMixedPrecision() ? cc.getPosqCorrection() : cc.getPosq());
-    wall.add(cc.getVelm());
-    drudeWallArguments = wall.addMixed(0.0);
-    wall.addMixed(0.0);
-    wall.addMixed(0.0);
+    for (ComputeKernel* kernel : {&drudeHardWall, &drudeHardWallLarge}) {
+        const bool large = kernel == &drudeHardWallLarge;
+        Arguments wall = integratorArguments(*kernel);
+        if (!large)
+            wall.add(numDrudeGroupsOnDevice);
+        if (!large)
+            wall.add(drudeGroupStart);
+        wall.add(drudePairStart);
+        wall.add(drudePairAtoms);
+        if (!large)
+            wall.add(drudeGroupRotates);
+        wall.add(drudeFailedPair);
+        wall.add(cc.getPosq());
+        wall.add(cc.getUseMixedPrecision() ? cc.getPosqCorrection() : cc.getPosq());
+        wall.add(cc.getVelm());
+        (large ? drudeWallLargeArguments : drudeWallArguments) = wall.addMixed(0.0);
+        wall.addMixed(0.0);
+        wall.addMixed(0.0);
+        if (large)
+            addLargeGroups(wall);
+    }
 
     Arguments relative = integratorArguments(drudeRelativeEnergy);
     addDrudeGroupArguments(relative);
     relative.add(drudeRelative);
     relative.add(drudeRelativeCountArray);
+    relative.add(largeDrudeRelative);
+    relative.add(numLargeDrudeGroups);
+    Arguments largeRelative = integratorArguments(drudeRelativeEnergyLarge);
+    addDrudeGroupArguments(largeRelative);
+    largeRelative.add(largeDrudeRelative);
+    addLargeGroups(largeRelative);
 
-    Arguments scale = integratorArguments(drudeScale);
-    addDrudeGroupArguments(scale);
+    for (ComputeKernel* kernel : {&drudeScale, &drudeScaleLarge}) {
+        Arguments scale = integratorArguments(*kernel);
+        addDrudeGroupArguments(scale);
+        if (kernel == &drudeScaleLarge)
+            addLargeGroups(scale);
+    }
+}
+
+void CommonRigidBodyState::launchOnLargeDrudeGroups(ComputeKernel& kernel) {
+    if (numLargeDrudeGroups > 0)
+        launch(kernel, numLargeDrudeGroups * LargeBodyThreads, LargeBodyThreads);
 }
 
 void CommonRigidBodyState::addDrudeNoise(double friction, double temperature, double drudeFriction,
@@ -121,27 +166,36 @@ void CommonRigidBodyState::addDrudeNoise(double friction, double temperature, do
     const double a = std::exp(-friction * h), aDrude = std::exp(-drudeFriction * h);
     const double scale = std::sqrt((1 - a * a) * BOLTZ * temperature);
     const double drudeScaleValue = std::sqrt((1 - aDrude * aDrude) * BOLTZ * drudeTemperature);
-    setMixedArg(drudeNoise, drudeNoiseArguments, a);
-    setMixedArg(drudeNoise, drudeNoiseArguments + 1, scale);
-    setMixedArg(drudeNoise, drudeNoiseArguments + 2, aDrude);
-    setMixedArg(drudeNoise, drudeNoiseArguments + 3, drudeScaleValue);
+    for (ComputeKernel* kernel : {&drudeNoise, &drudeNoiseLarge}) {
+        setMixedArg(*kernel, drudeNoiseArguments, a);
+        setMixedArg(*kernel, drudeNoiseArguments + 1, scale);
+        setMixedArg(*kernel, drudeNoiseArguments + 2, aDrude);
+        setMixedArg(*kernel, drudeNoiseArguments + 3, drudeScaleValue);
+    }
     flush();  // the random numbers of this launch after those of the queued phases
-    if (scale != 0 || drudeScaleValue != 0)
-        drudeNoise->setArg(drudeNoiseRandomIndex,
-                           (unsigned int) cc.getIntegrationUtilities().prepareRandomNumbers(cc.getPaddedNumAtoms()));
+    if (scale != 0 || drudeScaleValue != 0) {
+        const unsigned int randomIndex = cc.getIntegrationUtilities().prepareRandomNumbers(cc.getPaddedNumAtoms());
+        drudeNoise->setArg(drudeNoiseRandomIndex, randomIndex);
+        drudeNoiseLarge->setArg(drudeNoiseRandomIndex, randomIndex);
+    }
     const int items = numDrudeGroupsOnDevice + numUngrouped;
     if (items > 0)
         launch(drudeNoise, items);
+    launchOnLargeDrudeGroups(drudeNoiseLarge);
 }
 
 void CommonRigidBodyState::bounceDrudes(double maxDistance, double drudeTemperature, double h) {
     if (maxDistance <= 0 || numDrudeGroupsOnDevice == 0)
         return;
     drudeWallDistance = maxDistance;
-    setMixedArg(drudeHardWall, drudeWallArguments, maxDistance);
-    setMixedArg(drudeHardWall, drudeWallArguments + 1, BOLTZ * drudeTemperature);
-    setMixedArg(drudeHardWall, drudeWallArguments + 2, h);
+    for (ComputeKernel* kernel : {&drudeHardWall, &drudeHardWallLarge}) {
+        const int first = (kernel == &drudeHardWall ? drudeWallArguments : drudeWallLargeArguments);
+        setMixedArg(*kernel, first, maxDistance);
+        setMixedArg(*kernel, first + 1, BOLTZ * drudeTemperature);
+        setMixedArg(*kernel, first + 2, h);
+    }
     launch(drudeHardWall, numDrudeGroupsOnDevice);
+    launchOnLargeDrudeGroups(drudeHardWallLarge);
 }
 
 std::string CommonRigidBodyState::takeDrudeWallFailure() {
@@ -159,6 +213,7 @@ std::string CommonRigidBodyState::takeDrudeWallFailure() {
 
 void CommonRigidBodyState::sumDrudeKineticEnergies() {
     sumKineticEnergy();
+    launchOnLargeDrudeGroups(drudeRelativeEnergyLarge);  // read by the small groups' sums
     if (numDrudeGroupsOnDevice > 0)
         launch(drudeRelativeEnergy, numDrudeGroupsOnDevice, ReductionThreads);
 }
@@ -167,4 +222,5 @@ void CommonRigidBodyState::scaleDrudeVelocities() {
     const int items = numDrudeGroupsOnDevice + numUngrouped;
     if (items > 0)
         launch(drudeScale, items);
+    launchOnLargeDrudeGroups(drudeScaleLarge);
 }
