@@ -238,6 +238,8 @@ private:
      * bodies' orientations then set to those turns): no download, one 4-byte read.
      */
     bool fitsReference(OpenMM::ContextImpl& context);
+    /** Whether the screen just launched found anything (one 4-byte read); the verdict is cleared for the next. */
+    bool screenFound();
     /** projectVelocities' check on the host, for velocities the device's screen found unusable. */
     void projectVelocitiesOnHost(OpenMM::ContextImpl& context, double tolerance);
     std::vector<double> identityOrientations() const;
@@ -319,14 +321,14 @@ private:
     OpenMM::ComputeArray velocityScale;
     /** sumKineticEnergy's partial sums (1 per work group) and their count. */
     OpenMM::ComputeArray partials, partialCount;
-    /** Each body's three atoms (offsets) from which fitBodies turns its reference, and its verdict. */
-    OpenMM::ComputeArray bodyFrame, misfitBodies;
+    /** Each body's three atoms (offsets) from which fitBodies turns its reference. */
+    OpenMM::ComputeArray bodyFrame;
     std::vector<OpenMM::mm_int4> hostFrames;
     OpenMM::ComputeKernel fitBodies;
     int fitRoundoff = 0;
-    /** findUnusableVelocities' verdict: 1 if a velocity is not finite. */
-    OpenMM::ComputeArray unusableVelocities;
-    /** The bodies' kinetic energies (3 per body), computeKineticEnergies' program compiled at its first call. */
+    /** The verdict of a screen of values set from the host (fitBodiesToReference, findUnusableVelocities): 1 if it found any. */
+    OpenMM::ComputeArray screenVerdict;
+    /** The bodies' kinetic energies (3 per body), computeKineticEnergies' kernels created at its first call. */
     OpenMM::ComputeArray bodyEnergies;
     /** The bodies of more than LargeBodyAtoms atoms (body indices), and their count. */
     OpenMM::ComputeArray largeBodies;

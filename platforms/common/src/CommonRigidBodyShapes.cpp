@@ -160,17 +160,12 @@ bool CommonRigidBodyState::fitsReference(ContextImpl& context) {
         arguments.add(cc.getUseMixedPrecision() ? cc.getPosqCorrection() : cc.getPosq());
         fitRoundoff = arguments.addMixed(0.0);
         arguments.addMixed(0.0);
-        arguments.add(misfitBodies);
+        arguments.add(screenVerdict);
     }
     setMixedArg(fitBodies, fitRoundoff, coordinateRoundoff());
     setMixedArg(fitBodies, fitRoundoff + 1, largestBoxVector(context));
     fitBodies->execute(std::max(numBodies, cc.getNumAtoms()));
-    int misfit;
-    misfitBodies.download(&misfit);
-    if (misfit == 0)
-        return true;
-    misfitBodies.upload(vector<int>(1, 0));
-    return false;
+    return !screenFound();
 }
 
 vector<double> CommonRigidBodyState::identityOrientations() const {

@@ -168,16 +168,14 @@ void CommonRigidBodyState::initialize(const System& system, const RigidBodyTopol
     bodyReference.upload(vector<mm_double4>(bodyReference.getSize(), mm_double4(0, 0, 0, 0)), true);
     initializeMixedArray(bodyOrientation, identityOrientations(), "mrattleBodyOrientation");
     bodyFrame.initialize<mm_int4>(cc, std::max(1, numBodies), "mrattleBodyFrame");
-    misfitBodies.initialize<int>(cc, 1, "mrattleMisfitBodies");
-    misfitBodies.upload(vector<int>(1, 0));
+    screenVerdict.initialize<int>(cc, 1, "mrattleScreenVerdict");
+    screenVerdict.upload(vector<int>(1, 0));
     // The factors of the next scaling: every velocity's (and the Drude groups' R), and the Drude groups' C.
     initializeMixedArray(velocityScale, {1.0, 1.0}, "mrattleVelocityScale");
     // A launch has at most getNumThreadBlocks() work groups (OpenMM's rule, both platforms).
     initializeMixedArray(partials, vector<double>(cc.getNumThreadBlocks(), 0.0), "mrattlePartialSums");
     partialCount.initialize<int>(cc, 1, "mrattlePartialCount");
     partialCount.upload(vector<int>(1, 0));
-    unusableVelocities.initialize<int>(cc, 1, "mrattleUnusableVelocities");
-    unusableVelocities.upload(vector<int>(1, 0));
     // The integrator's declared arrays (none yet: one unread number).
     initializeMixedArray(integratorArrays, {0.0}, "mrattleIntegratorArrays");
     initializeMixedArray(integratorBackup, {0.0}, "mrattleIntegratorBackup");
@@ -259,13 +257,18 @@ void CommonRigidBodyState::projectVelocities(ContextImpl& context, double tolera
     cc.getVelm().copyTo(velmBackup);
     projectNow(tolerance, true);
     findUnusable->execute(cc.getNumAtoms());
-    int found;
-    unusableVelocities.download(&found);
-    if (found == 0)
+    if (!screenFound())
         return;
-    unusableVelocities.upload(vector<int>(1, 0));
     velmBackup.copyTo(cc.getVelm());
     projectVelocitiesOnHost(context, tolerance);
+}
+
+bool CommonRigidBodyState::screenFound() {
+    int found;
+    screenVerdict.download(&found);
+    if (found != 0)
+        screenVerdict.upload(vector<int>(1, 0));
+    return found != 0;
 }
 
 void CommonRigidBodyState::projectVelocitiesOnHost(ContextImpl& context, double tolerance) {
@@ -312,7 +315,7 @@ void CommonRigidBodyState::computeKineticEnergies(ContextImpl& context, double& 
     if (numBodies > 0) {
         if (!bodyKineticEnergy) {
             initializeMixedArray(bodyEnergies, vector<double>(3 * numBodies, 0.0), "mrattleBodyEnergies");
-            bodyKineticEnergy = cc.compileProgram(CommonMRattleKernelSources::bodyKineticEnergy)->createKernel("bodyKineticEnergy");
+            bodyKineticEnergy = stepProgram->createKernel("bodyKineticEnergy");
             Arguments arguments(bodyKineticEnergy, doubleMixed());
             arguments.add(numBodies);
             arguments.add(bodyStart);
