@@ -196,7 +196,7 @@ int main(int argc, char** argv) {
     // The programs the plugin compiles (CommonRigidBodyState::initialize): the step's, with
     // collisions.cc when the System has an AndersenThermostat, with thermostats.cc for the
     // thermostats, with drude.cc for the Drude integrators (and thermostats.cc for the
-    // Nose-Hoover one); and the body kinetic energy (computeKineticEnergies, no defines).
+    // Nose-Hoover one).
     const std::vector<std::pair<std::string, std::string>> stepPrograms = {
         {"step", CommonRigidBodyState::programSource("")},
         {"step+collisions", CommonRigidBodyState::programSource(CommonMRattleKernelSources::collisions)},
@@ -210,8 +210,6 @@ int main(int argc, char** argv) {
         const Defines defines = CommonRigidBodyState::programDefines(p.useDouble, p.useMixed);
         for (const auto& program : stepPrograms)
             failed += !compile(program.first, p, moduleText(p, program.second, defines), arch, outputDir);
-        failed += !compile("bodyKineticEnergy", p, moduleText(p, CommonMRattleKernelSources::bodyKineticEnergy, {}),
-                           arch, outputDir);
     }
     std::cout << (failed ? std::to_string(failed) + " program(s) failed\n" : "all programs compiled\n");
     return failed ? 1 : 0;
