@@ -6,10 +6,15 @@
  * One work item per body; bodies of more than LARGE_BODY_ATOMS atoms a work group each.
  */
 
+/** A body's centre-of-mass velocity from its mass and momentum. */
+INLINE_DEVICE mixed3 centerVelocity(mixed mass, mixed3 momentum) {
+    return make_mixed3(momentum.x/mass, momentum.y/mass, momentum.z/mass);
+}
+
 /** The energies of a body from its mass, momentum and the two sums over its atoms. */
 INLINE_DEVICE void storeBodyEnergies(GLOBAL mixed* RESTRICT energy, int body, mixed mass, mixed3 momentum,
         mixed rotational, mixed total) {
-    const mixed3 center = momentum*(1/mass);
+    const mixed3 center = centerVelocity(mass, momentum);
     energy[3*body] = 0.5f*mass*dot(center, center);
     energy[3*body+1] = 0.5f*rotational;
     energy[3*body+2] = 0.5f*total;
@@ -51,7 +56,7 @@ KERNEL void bodyKineticEnergy(int numBodies, GLOBAL const int* RESTRICT bodyStar
         mixed mass, rotational, total;
         mixed3 momentum;
         massAndMomentum(start, end, 1, bodyAtoms, velm, &mass, &momentum);
-        kineticSums(start, end, 1, momentum*(1/mass), bodyAtoms, velm, &rotational, &total);
+        kineticSums(start, end, 1, centerVelocity(mass, momentum), bodyAtoms, velm, &rotational, &total);
         storeBodyEnergies(energy, body, mass, momentum, rotational, total);
     }
 }
@@ -74,7 +79,7 @@ KERNEL void largeBodyKineticEnergy(GLOBAL const int* RESTRICT largeBodies, int n
         sumTwoOverGroup(mass, px);
         sumTwoOverGroup(py, pz);
         const mixed3 momentum = make_mixed3(px[0], py[0], pz[0]);
-        kineticSums(start + LOCAL_ID, end, LOCAL_SIZE, momentum*(1/mass[0]), bodyAtoms, velm, &r, &t);
+        kineticSums(start + LOCAL_ID, end, LOCAL_SIZE, centerVelocity(mass[0], momentum), bodyAtoms, velm, &r, &t);
         rotational[LOCAL_ID] = r;
         total[LOCAL_ID] = t;
         sumTwoOverGroup(rotational, total);
