@@ -49,14 +49,9 @@ KERNEL void collideLargeBodies(BODY_ARGUMENTS, mixed kT, GLOBAL const float4* RE
     for (int i = GROUP_ID; i < numLargeBodies; i += NUM_GROUPS) {
         const int body = largeBodies[i], start = bodyStart[body], end = bodyStart[body+1], shape = bodyShape[body];
         const bool checks = !failed && isLargeBody(start, end, shape);
-        const BodySums sums = gatherLargeBody(scratch, checks, start, end, bodyAtoms, posq, posqCorrection, velm, false,
-                                              velm, zeroMatrix());
-        mixed residual = 0, scale = 0;
-        if (checks)
-            rigidResidual(rigidMotionOf(sums, start, end, bodyAtoms, shape, posq, posqCorrection), start + LOCAL_ID, end,
-                          LOCAL_SIZE, bodyAtoms, posq, posqCorrection, velm, &residual, &scale);
-        residual = maxOverWorkGroup(maxima, residual);
-        scale = maxOverWorkGroup(maxima, scale);
+        mixed residual, scale;
+        largeBodyMotion(scratch, maxima, checks, checks, start, end, bodyAtoms, shape, posq, posqCorrection, velm,
+                        &residual, &scale);
         if (checks && collided(residual, scale))
             redrawVelocities(start + LOCAL_ID, end, LOCAL_SIZE, bodyAtoms, kT, random, randomIndex, velm);
     }

@@ -129,6 +129,27 @@ KERNEL void advanceLargeBodies(ADVANCE_ARGUMENTS, GLOBAL const int* RESTRICT lar
 }
 
 /**
+ * A large body's rigid motion (if needed) and, if measured, the largest departures from it
+ * over the work group (rigidResidual's residual and scale; 0 if not). Every item takes part.
+ */
+INLINE_DEVICE RigidMotion largeBodyMotion(LOCAL_ARG BodyAtomSums* scratch, LOCAL_ARG mixed* maxima, bool needed,
+        bool measured, int start, int end, GLOBAL const int* RESTRICT bodyAtoms, int shape,
+        GLOBAL const real4* RESTRICT posq, GLOBAL const real4* RESTRICT posqCorrection,
+        GLOBAL const mixed4* RESTRICT velm, mixed* residual, mixed* scale) {
+    const BodySums sums = gatherLargeBody(scratch, needed, start, end, bodyAtoms, posq, posqCorrection, velm, false,
+                                          velm, zeroMatrix());
+    RigidMotion motion;
+    if (needed)
+        motion = rigidMotionOf(sums, start, end, bodyAtoms, shape, posq, posqCorrection);
+    *residual = *scale = 0;
+    if (measured)
+        rigidResidual(motion, start + LOCAL_ID, end, LOCAL_SIZE, bodyAtoms, posq, posqCorrection, velm, residual, scale);
+    *residual = maxOverWorkGroup(maxima, *residual);
+    *scale = maxOverWorkGroup(maxima, *scale);
+    return motion;
+}
+
+/**
  * projectBodies for the large bodies, one work group per body: velocities already rigid to
  * round-off (RIGID_TOLERANCE) are left as they are with onlyIfNotRigid.
  */
@@ -140,17 +161,9 @@ KERNEL void projectLargeBodies(BODY_ARGUMENTS, int onlyIfNotRigid, GLOBAL const 
     for (int i = GROUP_ID; i < numLargeBodies; i += NUM_GROUPS) {
         const int body = largeBodies[i], start = bodyStart[body], end = bodyStart[body+1], shape = bodyShape[body];
         const bool moves = !failed && isLargeBody(start, end, shape);
-        const BodySums sums = gatherLargeBody(scratch, moves, start, end, bodyAtoms, posq, posqCorrection, velm, false,
-                                              velm, zeroMatrix());
-        RigidMotion motion;
-        if (moves)
-            motion = rigidMotionOf(sums, start, end, bodyAtoms, shape, posq, posqCorrection);
-        mixed residual = 0, scale = 0;
-        if (moves && onlyIfNotRigid)
-            rigidResidual(motion, start + LOCAL_ID, end, LOCAL_SIZE, bodyAtoms, posq, posqCorrection, velm, &residual,
-                          &scale);
-        residual = maxOverWorkGroup(maxima, residual);
-        scale = maxOverWorkGroup(maxima, scale);
+        mixed residual, scale;
+        const RigidMotion motion = largeBodyMotion(scratch, maxima, moves, moves && onlyIfNotRigid, start, end,
+                                                   bodyAtoms, shape, posq, posqCorrection, velm, &residual, &scale);
         if (moves && (!onlyIfNotRigid || !(residual <= RIGID_TOLERANCE*RIGID_TOLERANCE*scale)))
             setRigidVelocities(motion, start + LOCAL_ID, end, LOCAL_SIZE, bodyAtoms, posq, posqCorrection, velm);
     }
