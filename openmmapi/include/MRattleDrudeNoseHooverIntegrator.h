@@ -86,7 +86,8 @@ public:
     }
     /**
      * The instantaneous temperature of the Drude particles' motion relative to their cores,
-     * 2 KE_C / (3 n_drude k_B), in Kelvin (0 without Drude particles).
+     * 2 KE_C / (3 n_drude k_B), in Kelvin (0 without Drude particles); KE_C is summed by the
+     * platform (on the device on OpenCL and CUDA).
      */
     double computeDrudeTemperature();
     /**

@@ -164,31 +164,11 @@ double DrudeGroups::relativeKineticEnergy(const vector<Vec3>& x, const vector<Ve
     return energy;
 }
 
-double DrudeGroups::contextRelativeKineticEnergy(ContextImpl& context, const RigidBodyTopology& topology,
-                                                 const char* integratorName, int& numDrudes) {
-    const System& system = context.getSystem();
-    const DrudeGroups groups(system, topology, integratorName);
-    vector<Vec3> x, v;
-    context.getPositions(x);
-    context.getVelocities(v);
-    vector<double> masses(system.getNumParticles());
-    for (int i = 0; i < system.getNumParticles(); i++)
-        masses[i] = system.getParticleMass(i);
-    numDrudes = groups.getNumDrudeParticles();
-    return groups.relativeKineticEnergy(x, v, masses);
+double DrudeGroups::drudeTemperature(double relativeKineticEnergy, int numDrudes) {
+    return numDrudes == 0 ? 0.0 : 2 * relativeKineticEnergy / (3 * numDrudes * BOLTZ);
 }
 
-double DrudeGroups::drudeTemperature(ContextImpl& context, const RigidBodyTopology& topology,
-                                     const char* integratorName) {
-    int numDrudes;
-    const double relative = contextRelativeKineticEnergy(context, topology, integratorName, numDrudes);
-    return numDrudes == 0 ? 0.0 : 2 * relative / (3 * numDrudes * BOLTZ);
-}
-
-double DrudeGroups::bodyTemperature(ContextImpl& context, const RigidBodyTopology& topology, const char* integratorName,
-                                    double kineticEnergy, int dof) {
-    int numDrudes;
-    const double relative = contextRelativeKineticEnergy(context, topology, integratorName, numDrudes);
+double DrudeGroups::bodyTemperature(double kineticEnergy, double relativeKineticEnergy, int dof, int numDrudes) {
     const int bodyDof = dof - 3 * numDrudes;
-    return bodyDof <= 0 ? 0.0 : 2 * (kineticEnergy - relative) / (bodyDof * BOLTZ);
+    return bodyDof <= 0 ? 0.0 : 2 * (kineticEnergy - relativeKineticEnergy) / (bodyDof * BOLTZ);
 }

@@ -44,12 +44,15 @@ void MRattleDrudeLangevinIntegrator::setMaxDrudeDistance(double distance) {
 }
 
 double MRattleDrudeLangevinIntegrator::computeDrudeTemperature() {
-    return DrudeGroups::drudeTemperature(*context, getTopology(), getIntegratorName());
+    int numDrudes;
+    const double relative = getStepKernel().computeDrudeKineticEnergy(*context, numDrudes);
+    return DrudeGroups::drudeTemperature(relative, numDrudes);
 }
 
 double MRattleDrudeLangevinIntegrator::computeBodyTemperature() {
-    return DrudeGroups::bodyTemperature(*context, getTopology(), getIntegratorName(), computeKineticEnergy(),
-                                        getNumDegreesOfFreedom());
+    int numDrudes;
+    const double relative = getStepKernel().computeDrudeKineticEnergy(*context, numDrudes);
+    return DrudeGroups::bodyTemperature(computeKineticEnergy(), relative, getNumDegreesOfFreedom(), numDrudes);
 }
 
 std::vector<Vec3> MRattleDrudeLangevinIntegrator::getVelocitiesForTemperature(const System& system, double temperature, int randomSeed) const {

@@ -53,12 +53,15 @@ void MRattleDrudeNoseHooverIntegrator::setMaxDrudeDistance(double distance) {
 }
 
 double MRattleDrudeNoseHooverIntegrator::computeDrudeTemperature() {
-    return DrudeGroups::drudeTemperature(*context, getTopology(), getIntegratorName());
+    int numDrudes;
+    const double relative = getStepKernel().computeDrudeKineticEnergy(*context, numDrudes);
+    return DrudeGroups::drudeTemperature(relative, numDrudes);
 }
 
 double MRattleDrudeNoseHooverIntegrator::computeBodyTemperature() {
-    return DrudeGroups::bodyTemperature(*context, getTopology(), getIntegratorName(), computeKineticEnergy(),
-                                        getNumDegreesOfFreedom());
+    int numDrudes;
+    const double relative = getStepKernel().computeDrudeKineticEnergy(*context, numDrudes);
+    return DrudeGroups::bodyTemperature(computeKineticEnergy(), relative, getNumDegreesOfFreedom(), numDrudes);
 }
 
 double MRattleDrudeNoseHooverIntegrator::computeHeatBathEnergy() {

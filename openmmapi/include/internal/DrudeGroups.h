@@ -70,12 +70,10 @@ public:
     double relativeKineticEnergy(const std::vector<OpenMM::Vec3>& x, const std::vector<OpenMM::Vec3>& v,
                                  const std::vector<double>& masses) const;
     /**
-     * The Drude temperature 2 KE_C / (3 n_drude k_B) of a Context, in K (0 without Drude
-     * particles): a host computation on any platform, as a reporter's; what the Drude
-     * integrators' computeDrudeTemperature() returns.
+     * The Drude temperature 2 KE_C / (3 n_drude k_B) in K (0 without Drude particles): what the
+     * Drude integrators' computeDrudeTemperature() returns, KE_C from their step kernel.
      */
-    static double drudeTemperature(OpenMM::ContextImpl& context, const RigidBodyTopology& topology,
-                                   const char* integratorName);
+    static double drudeTemperature(double relativeKineticEnergy, int numDrudes);
     /**
      * Scales the relative part (v - v_R) of every group's velocities v, set for a Context's
      * positions, by factor: the Drude particles' relative motion drawn at a temperature of its own.
@@ -83,17 +81,13 @@ public:
     static void scaleRelativeMotion(OpenMM::ContextImpl& context, const RigidBodyTopology& topology,
                                     const char* integratorName, double factor, std::vector<OpenMM::Vec3>& v);
     /**
-     * The bodies' and free particles' temperature 2 (KE - KE_C) / ((dof - 3 n_drude) k_B) of a
-     * Context, in K (0 without such degrees of freedom), given its kinetic energy KE and dof
-     * degrees of freedom in all: what computeBodyTemperature() returns.
+     * The bodies' and free particles' temperature 2 (KE - KE_C) / ((dof - 3 n_drude) k_B) in K
+     * (0 without such degrees of freedom), given the kinetic energy KE and dof degrees of
+     * freedom in all: what computeBodyTemperature() returns.
      */
-    static double bodyTemperature(OpenMM::ContextImpl& context, const RigidBodyTopology& topology,
-                                  const char* integratorName, double kineticEnergy, int dof);
+    static double bodyTemperature(double kineticEnergy, double relativeKineticEnergy, int dof, int numDrudes);
 
 private:
-    /** KE_C (kJ/mol) of a Context's positions and velocities, and its number of Drude particles. */
-    static double contextRelativeKineticEnergy(OpenMM::ContextImpl& context, const RigidBodyTopology& topology,
-                                               const char* integratorName, int& numDrudes);
     static std::vector<std::pair<int, int> > drudePairs(const OpenMM::System& system);
     std::vector<Group> groups;
     std::vector<std::pair<int, int> > pairs;

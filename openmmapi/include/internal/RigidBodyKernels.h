@@ -72,6 +72,14 @@ public:
     virtual double computeHeatBathEnergy(OpenMM::ContextImpl& context, const RigidBodyIntegrator& integrator) {
         return 0;
     }
+    /**
+     * The Drude groups' relative kinetic energy KE_C (their Drude particles' motion relative
+     * to their cores) now, and the number of Drude particles; 0 and 0 without Drude groups.
+     */
+    virtual double computeDrudeKineticEnergy(OpenMM::ContextImpl& context, int& numDrudeParticles) {
+        numDrudeParticles = 0;
+        return 0;
+    }
     /** The platform's rigid-body state, which the API asks for everything but the step. */
     virtual RigidBodyState& getState() = 0;
 };

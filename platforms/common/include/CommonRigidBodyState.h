@@ -91,6 +91,8 @@ public:
      * drudeRelativeEnergies() (their count in drudeRelativeCount()), for a two-chain thermostat's kernel (which puts its factors for R and C into velocityScale[0], [1]).
      */
     void sumDrudeKineticEnergies();
+    /** The Drude groups' KE_C now (their relative-energy kernels, outside a step; one read). */
+    double computeDrudeKineticEnergy();
     /** Every Drude group's R scaled by velocityScale[0], its C by velocityScale[1]; every other atom by [0]. */
     void scaleDrudeVelocities();
     /** Virtual sites at the new positions, then the forces there. */

@@ -113,6 +113,7 @@ public:
     void initialize(const OpenMM::System& system, const RigidBodyTopology& topology,
                     const RigidBodyIntegrator& integrator) override;
     void execute(OpenMM::ContextImpl& context, const RigidBodyIntegrator& integrator, bool& forcesAreValid) override;
+    double computeDrudeKineticEnergy(OpenMM::ContextImpl& context, int& numDrudeParticles) override;
 
 private:
     int numDrudes = 0;
@@ -131,6 +132,7 @@ public:
                     const RigidBodyIntegrator& integrator) override;
     void execute(OpenMM::ContextImpl& context, const RigidBodyIntegrator& integrator, bool& forcesAreValid) override;
     double computeHeatBathEnergy(OpenMM::ContextImpl& context, const RigidBodyIntegrator& integrator) override;
+    double computeDrudeKineticEnergy(OpenMM::ContextImpl& context, int& numDrudeParticles) override;
 
 private:
     /** Both chains over half a step from KE_R and KE_C, then the velocities scaled by their factors. */

@@ -49,6 +49,13 @@ void CommonIntegrateMRattleDrudeLangevinStepKernel::execute(ContextImpl& context
     state.endStep(h, forcesAreValid);
 }
 
+double CommonIntegrateMRattleDrudeLangevinStepKernel::computeDrudeKineticEnergy(ContextImpl& context,
+                                                                                int& numDrudeParticles) {
+    ContextSelector selector(state.computeContext());
+    numDrudeParticles = numDrudes;
+    return state.computeDrudeKineticEnergy();
+}
+
 // ---- MRattleDrudeNoseHooverIntegrator
 
 void CommonIntegrateMRattleDrudeNoseHooverStepKernel::initialize(const System& system, const RigidBodyTopology& topology,
@@ -130,4 +137,11 @@ double CommonIntegrateMRattleDrudeNoseHooverStepKernel::computeHeatBathEnergy(Co
     return chain.energy(dof, BOLTZ * integrator.getTemperature(), integrator.getCollisionFrequency()) +
            drudeChain.energy(drudeDof, BOLTZ * integrator.getDrudeTemperature(),
                              integrator.getDrudeCollisionFrequency());
+}
+
+double CommonIntegrateMRattleDrudeNoseHooverStepKernel::computeDrudeKineticEnergy(ContextImpl& context,
+                                                                                  int& numDrudeParticles) {
+    ContextSelector selector(state.computeContext());
+    numDrudeParticles = numDrudes;
+    return state.computeDrudeKineticEnergy();
 }

@@ -218,6 +218,24 @@ void CommonRigidBodyState::sumDrudeKineticEnergies() {
         launch(drudeRelativeEnergy, numDrudeGroupsOnDevice, ReductionThreads);
 }
 
+double CommonRigidBodyState::computeDrudeKineticEnergy() {
+    synchronize();  // a step not yet checked may have failed
+    if (numDrudeGroupsOnDevice == 0)
+        return 0;
+    if (!argumentsSet)
+        setKernelArguments();
+    if (numLargeDrudeGroups > 0)
+        drudeRelativeEnergyLarge->execute(numLargeDrudeGroups * LargeBodyThreads, LargeBodyThreads);
+    drudeRelativeEnergy->execute(numDrudeGroupsOnDevice, ReductionThreads);
+    int count;
+    drudeRelativeCountArray.download(&count);
+    const vector<double> partials = downloadAsDouble(drudeRelative);
+    double twice = 0;
+    for (int g = 0; g < count; g++)
+        twice += partials[g];
+    return 0.5 * twice;
+}
+
 void CommonRigidBodyState::scaleDrudeVelocities() {
     const int items = numDrudeGroupsOnDevice + numUngrouped;
     if (items > 0)

@@ -122,6 +122,7 @@ public:
     void initialize(const OpenMM::System& system, const RigidBodyTopology& topology,
                     const RigidBodyIntegrator& integrator) override;
     void execute(OpenMM::ContextImpl& context, const RigidBodyIntegrator& integrator, bool& forcesAreValid) override;
+    double computeDrudeKineticEnergy(OpenMM::ContextImpl& context, int& numDrudeParticles) override;
 
 private:
     DrudeGroups groups;
@@ -140,6 +141,7 @@ public:
     void execute(OpenMM::ContextImpl& context, const RigidBodyIntegrator& integrator, bool& forcesAreValid) override;
     /** Both chains' energies. */
     double computeHeatBathEnergy(OpenMM::ContextImpl& context, const RigidBodyIntegrator& integrator) override;
+    double computeDrudeKineticEnergy(OpenMM::ContextImpl& context, int& numDrudeParticles) override;
 
 private:
     /** Both chains over half a step, then the velocities scaled by their factors. */

@@ -9,6 +9,7 @@
 
 using namespace MRattlePlugin;
 using namespace OpenMM;
+using std::vector;
 
 // ---- MRattleIntegrator -------------------------------------------------------------------
 
@@ -143,6 +144,28 @@ void ReferenceIntegrateRigidSplittingStepKernel::execute(ContextImpl& context, c
 
 // ---- MRattleDrudeLangevinIntegrator ------------------------------------------------------
 
+namespace {
+
+/** KE_C of the groups at the Context's positions and velocities now. */
+double drudeKineticEnergy(ContextImpl& context, const DrudeGroups& groups, int& numDrudeParticles) {
+    const System& system = context.getSystem();
+    vector<Vec3> x, v;
+    context.getPositions(x);
+    context.getVelocities(v);
+    vector<double> masses(system.getNumParticles());
+    for (int i = 0; i < system.getNumParticles(); i++)
+        masses[i] = system.getParticleMass(i);
+    numDrudeParticles = groups.getNumDrudeParticles();
+    return groups.relativeKineticEnergy(x, v, masses);
+}
+
+} // namespace
+
+double ReferenceIntegrateMRattleDrudeLangevinStepKernel::computeDrudeKineticEnergy(ContextImpl& context,
+                                                                                   int& numDrudeParticles) {
+    return drudeKineticEnergy(context, groups, numDrudeParticles);
+}
+
 void ReferenceIntegrateMRattleDrudeLangevinStepKernel::initialize(const System& system,
                                                                   const RigidBodyTopology& topology,
                                                                   const RigidBodyIntegrator& integrator) {
@@ -231,6 +254,11 @@ void ReferenceIntegrateMRattleDrudeNoseHooverStepKernel::execute(ContextImpl& co
     state.project(tolerance);
     chainsHalfStep(integrator);
     state.endStep(h, forcesAreValid);
+}
+
+double ReferenceIntegrateMRattleDrudeNoseHooverStepKernel::computeDrudeKineticEnergy(ContextImpl& context,
+                                                                                     int& numDrudeParticles) {
+    return drudeKineticEnergy(context, groups, numDrudeParticles);
 }
 
 double ReferenceIntegrateMRattleDrudeNoseHooverStepKernel::computeHeatBathEnergy(ContextImpl& context,
