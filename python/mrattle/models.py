@@ -215,18 +215,32 @@ def waterBox(numMolecules=216, cutoff=0.9*unit.nanometers, density=0.997*unit.gr
     return Model(topology, system, positions, None)
 
 
-def swm4ndpWater(numMolecules=8):
-    """numMolecules polarizable SWM4-NDP waters (OpenMM's swm4ndp.xml: O, H1, H2, an M virtual
-    site and a Drude particle on O, added by Modeller.addExtraParticles) taken from OpenMM's
-    tip3p.pdb, in vacuum without cutoff: a small test system for the Drude integrators, whose
+def swm4ndpWater(numMolecules=None, boxSize=None, cutoff=0.8*unit.nanometers):
+    """Polarizable SWM4-NDP water (OpenMM's swm4ndp.xml: O, H1, H2, an M virtual site and a
+    Drude particle on O, added by Modeller.addExtraParticles; rigid water constraints), whose
     bodies are rigidBodies(model.topology, model.system) (O, H1, H2; the Drude particles free).
+
+    Either numMolecules (default 8) waters taken from OpenMM's tip3p.pdb, in vacuum without
+    cutoff: a small test system for the Drude integrators; or, with boxSize (a length), a cubic
+    box of that edge filled by Modeller.addSolvent, with PME at cutoff: a liquid.
     """
+    forcefield = app.ForceField('swm4ndp.xml')
+    if boxSize is not None:
+        if numMolecules is not None:
+            raise ValueError('swm4ndpWater: give numMolecules or boxSize, not both')
+        edge = _inUnit(boxSize, unit.nanometers)
+        modeller = app.Modeller(app.Topology(), [])
+        modeller.addSolvent(app.ForceField('amber14/tip3p.xml'), boxSize=openmm.Vec3(edge, edge, edge)*unit.nanometer)
+        modeller.addExtraParticles(forcefield)
+        system = forcefield.createSystem(modeller.topology, nonbondedMethod=app.PME, nonbondedCutoff=cutoff,
+                                         rigidWater=True)
+        return Model(modeller.topology, system, modeller.positions, None)
+    numMolecules = 8 if numMolecules is None else numMolecules
     pdb = app.PDBFile(os.path.join(os.path.dirname(app.__file__), 'data', 'tip3p.pdb'))
     waters = list(pdb.topology.residues())
     if not 1 <= numMolecules <= len(waters):
         raise ValueError('swm4ndpWater: numMolecules must be 1 to %d (tip3p.pdb\'s waters), got %d'
                          % (len(waters), numMolecules))
-    forcefield = app.ForceField('swm4ndp.xml')
     modeller = app.Modeller(pdb.topology, pdb.positions)
     modeller.delete(waters[numMolecules:])
     modeller.addExtraParticles(forcefield)

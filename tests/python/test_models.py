@@ -96,3 +96,25 @@ def test_builder_writes_pdb(tmp_path):
     pdb = app.PDBFile(path)
     assert pdb.topology.getNumAtoms() == 324
     assert [r.name for r in pdb.topology.residues()] == ['BNZ']*27
+
+
+def test_swm4ndp_water_in_vacuum_and_as_a_periodic_box():
+    # In vacuum: 8 molecules of 5 particles (O, H1, H2, the M site, a Drude particle), no cutoff.
+    vacuum = models.swm4ndpWater()
+    assert vacuum.system.getNumParticles() == 40 and not vacuum.system.usesPeriodicBoundaryConditions()
+    # A box: filled by Modeller.addSolvent, PME at the cutoff, one Drude particle per water, rigid O-H-H.
+    box = models.swm4ndpWater(boxSize=1.9 * unit.nanometers, cutoff=0.7 * unit.nanometers)
+    nonbonded = next(f for f in box.system.getForces() if isinstance(f, openmm.NonbondedForce))
+    drude = next(f for f in box.system.getForces() if isinstance(f, openmm.DrudeForce))
+    waters = box.topology.getNumResidues()
+    assert waters > 150 and box.system.getNumParticles() == 5 * waters and drude.getNumParticles() == waters
+    assert nonbonded.getNonbondedMethod() == openmm.NonbondedForce.PME
+    assert nonbonded.getCutoffDistance().value_in_unit(unit.nanometers) == pytest.approx(0.7)
+    a, b, c = box.system.getDefaultPeriodicBoxVectors()
+    assert [v.value_in_unit(unit.nanometers) for v in (a[0], b[1], c[2])] == [pytest.approx(1.9)] * 3
+    assert box.system.getNumConstraints() == 3 * waters
+    assert len(mrattle.rigidBodies(box.topology, box.system, atoms=['O', 'H1', 'H2'])) == waters
+    with pytest.raises(ValueError, match='numMolecules or boxSize'):
+        models.swm4ndpWater(4, boxSize=1.9 * unit.nanometers)
+    with pytest.raises(ValueError, match='numMolecules must be'):
+        models.swm4ndpWater(0)

@@ -8,7 +8,7 @@ import subprocess
 
 import numpy as np
 import openmm
-from openmm import app, unit
+from openmm import unit
 
 import mrattle
 from .common import KB, TEMPERATURE, context, density, interleaved, machine_description, masses as masses_of, removes_cm
@@ -23,16 +23,12 @@ QUICK = dict(box=1.9, step=STEP, equilibrate=500, settle=200, nvt=200, npt=200, 
 
 
 def swm4ndp(box_nm):
-    """A cubic SWM4-NDP box (OpenMM's swm4ndp.xml, PME 0.8 nm, SETTLE), its Drude pairs and bodies (O, H1, H2)."""
-    forcefield = app.ForceField('swm4ndp.xml')
-    modeller = app.Modeller(app.Topology(), [])
-    modeller.addSolvent(app.ForceField('amber14/tip3p.xml'), boxSize=openmm.Vec3(*[box_nm] * 3) * unit.nanometer)
-    modeller.addExtraParticles(forcefield)
-    system = forcefield.createSystem(modeller.topology, nonbondedMethod=app.PME,
-                                     nonbondedCutoff=0.8 * unit.nanometer, rigidWater=True)
+    """A cubic SWM4-NDP box (mrattle.models.swm4ndpWater: PME 0.8 nm, SETTLE), its Drude pairs and bodies (O, H1, H2)."""
+    model = mrattle.models.swm4ndpWater(boxSize=box_nm * unit.nanometer)
+    system = model.system
     drude = next(f for f in system.getForces() if isinstance(f, openmm.DrudeForce))
     pairs = np.array([drude.getParticleParameters(i)[1::-1] for i in range(drude.getNumParticles())])  # (core, Drude)
-    return system, modeller.positions, pairs, mrattle.rigidBodies(modeller.topology, system, atoms=['O', 'H1', 'H2'])
+    return system, model.positions, pairs, mrattle.rigidBodies(model.topology, system, atoms=['O', 'H1', 'H2'])
 
 
 def integrator(name, bodies, seed, step=STEP):
