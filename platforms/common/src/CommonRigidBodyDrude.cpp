@@ -118,10 +118,10 @@ void CommonRigidBodyState::setDrudeKernelArguments() {
     for (ComputeKernel* kernel : {&drudeHardWall, &drudeHardWallLarge}) {
         const bool large = kernel == &drudeHardWallLarge;
         Arguments wall = integratorArguments(*kernel);
-        if (!large)
+        if (!large) {
             wall.add(numDrudeGroupsOnDevice);
-        if (!large)
             wall.add(drudeGroupStart);
+        }
         wall.add(drudePairStart);
         wall.add(drudePairAtoms);
         if (!large)
@@ -166,7 +166,11 @@ void CommonRigidBodyState::addDrudeNoise(double friction, double temperature, do
     const double a = std::exp(-friction * h), aDrude = std::exp(-drudeFriction * h);
     const double scale = std::sqrt((1 - a * a) * BOLTZ * temperature);
     const double drudeScaleValue = std::sqrt((1 - aDrude * aDrude) * BOLTZ * drudeTemperature);
-    for (ComputeKernel* kernel : {&drudeNoise, &drudeNoiseLarge}) {
+    // The large groups' kernel only where there are any: setting arguments costs the host time.
+    vector<ComputeKernel*> kernels = {&drudeNoise};
+    if (numLargeDrudeGroups > 0)
+        kernels.push_back(&drudeNoiseLarge);
+    for (ComputeKernel* kernel : kernels) {
         setMixedArg(*kernel, drudeNoiseArguments, a);
         setMixedArg(*kernel, drudeNoiseArguments + 1, scale);
         setMixedArg(*kernel, drudeNoiseArguments + 2, aDrude);
@@ -175,8 +179,8 @@ void CommonRigidBodyState::addDrudeNoise(double friction, double temperature, do
     flush();  // the random numbers of this launch after those of the queued phases
     if (scale != 0 || drudeScaleValue != 0) {
         const unsigned int randomIndex = cc.getIntegrationUtilities().prepareRandomNumbers(cc.getPaddedNumAtoms());
-        drudeNoise->setArg(drudeNoiseRandomIndex, randomIndex);
-        drudeNoiseLarge->setArg(drudeNoiseRandomIndex, randomIndex);
+        for (ComputeKernel* kernel : kernels)
+            (*kernel)->setArg(drudeNoiseRandomIndex, randomIndex);
     }
     const int items = numDrudeGroupsOnDevice + numUngrouped;
     if (items > 0)
@@ -188,12 +192,14 @@ void CommonRigidBodyState::bounceDrudes(double maxDistance, double drudeTemperat
     if (maxDistance <= 0 || numDrudeGroupsOnDevice == 0)
         return;
     drudeWallDistance = maxDistance;
-    for (ComputeKernel* kernel : {&drudeHardWall, &drudeHardWallLarge}) {
-        const int first = (kernel == &drudeHardWall ? drudeWallArguments : drudeWallLargeArguments);
-        setMixedArg(*kernel, first, maxDistance);
-        setMixedArg(*kernel, first + 1, BOLTZ * drudeTemperature);
-        setMixedArg(*kernel, first + 2, h);
-    }
+    auto setWall = [&](ComputeKernel& kernel, int first) {
+        setMixedArg(kernel, first, maxDistance);
+        setMixedArg(kernel, first + 1, BOLTZ * drudeTemperature);
+        setMixedArg(kernel, first + 2, h);
+    };
+    setWall(drudeHardWall, drudeWallArguments);
+    if (numLargeDrudeGroups > 0)
+        setWall(drudeHardWallLarge, drudeWallLargeArguments);
     launch(drudeHardWall, numDrudeGroupsOnDevice);
     launchOnLargeDrudeGroups(drudeHardWallLarge);
 }
