@@ -83,6 +83,7 @@ PLUGIN_PATH = PLUGIN_PATHS['Reference']
 from .reporters import StateDataReporter, degreesOfFreedom, kineticTemperature
 from .interactions import removeIntraBodyInteractions
 from .topology import rigidBodies, declareRigidBodies
+from .drude import setDrudeMass
 from . import models, baselines
 from .serialization import asPluginIntegrator, installXmlSerializerHooks as _installXmlSerializerHooks
 from .minimize import minimizeEnergy, RigidBodyMinimizer, installLocalEnergyMinimizerHook as _installMinimizerHook
@@ -93,5 +94,5 @@ _installMinimizerHook()
 
 __all__ = ['RigidBodyIntegrator', 'INTEGRATOR_CLASSES'] + [_class.__name__ for _class in INTEGRATOR_CLASSES] + [
     'StateDataReporter', 'degreesOfFreedom', 'kineticTemperature', 'removeIntraBodyInteractions', 'rigidBodies',
-    'declareRigidBodies', 'asPluginIntegrator', 'minimizeEnergy', 'RigidBodyMinimizer', 'models', 'baselines',
+    'declareRigidBodies', 'setDrudeMass', 'asPluginIntegrator', 'minimizeEnergy', 'RigidBodyMinimizer', 'models', 'baselines',
     'PLUGIN_PATH', 'PLUGIN_PATHS', 'PLATFORMS', 'DEVICE_PLATFORMS']

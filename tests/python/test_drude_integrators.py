@@ -172,3 +172,58 @@ def test_reporter_writes_body_and_drude_temperatures(cls):
     with pytest.raises(ValueError, match='MRattleDrudeNoseHooverIntegrator'):
         other.reporters.append(mrattle.StateDataReporter(io.StringIO(), 1, drudeTemperature=True))
         other.step(1)
+
+
+def test_set_drude_mass_moves_mass_from_each_core():
+    system, positions, bodies = swm4ndp(4)
+    before = [system.getParticleMass(i).value_in_unit(unit.amu) for i in range(system.getNumParticles())]
+    drude = [f for f in system.getForces() if isinstance(f, openmm.DrudeForce)][0]
+    pairs = [drude.getParticleParameters(k)[:2] for k in range(drude.getNumParticles())]
+    assert mrattle.setDrudeMass(system, 1.6*unit.amu) == 4
+    after = [system.getParticleMass(i).value_in_unit(unit.amu) for i in range(system.getNumParticles())]
+    for particle, core in pairs:
+        assert after[particle] == pytest.approx(1.6)
+        assert after[particle] + after[core] == pytest.approx(before[particle] + before[core], rel=1e-14)
+    moved = {i for pair in pairs for i in pair}
+    assert all(after[i] == before[i] for i in range(len(before)) if i not in moved)
+    mrattle.setDrudeMass(system, np.float64(0.8))  # a number is in amu; numpy's too
+    assert system.getParticleMass(pairs[0][0]).value_in_unit(unit.amu) == pytest.approx(0.8)
+    mrattle.setDrudeMass(system, 0.4*unit.dalton)
+    assert [system.getParticleMass(i).value_in_unit(unit.amu) for i in range(len(before))] == pytest.approx(before)
+    for bad in (0, -1, float('nan'), float('inf')):
+        with pytest.raises(ValueError, match='finite number > 0'):
+            mrattle.setDrudeMass(system, bad)
+    with pytest.raises(ValueError, match='core particle %d without mass' % pairs[0][1]):
+        mrattle.setDrudeMass(system, 16*unit.amu)
+    with pytest.raises(ValueError, match='no DrudeForce'):
+        mrattle.setDrudeMass(openmm.System(), 1.6)
+
+
+@pytest.mark.parametrize('drudeMass', [None, 1.6], ids=['force field 0.4 amu', '1.6 amu'])
+def test_2fs_steps_need_a_heavier_drude_particle(drudeMass):
+    """The Drude spring (k = 4.2e5 kJ/mol/nm^2) with 0.4 amu has omega h = 2.05 at 2 fs, past
+    velocity Verlet's limit: its Drude particles are thrown beyond the wall within a few steps.
+    With 1.6 amu (omega h = 1.0, as 0.4 amu at 1 fs) 8 waters take 500 steps, rigid, held by the wall."""
+    system, positions, bodies = swm4ndp(8)
+    if drudeMass:
+        mrattle.setDrudeMass(system, drudeMass)
+    integrator = make(LANGEVIN, 2*unit.femtoseconds)
+    integrator.setMaxDrudeDistance(0.02*unit.nanometer)
+    integrator.setRandomNumberSeed(5)
+    for body in bodies:
+        integrator.addRigidBody(body)
+    context = openmm.Context(system, integrator, openmm.Platform.getPlatformByName('Reference'))
+    context.setPositions(positions)
+    context.setVelocitiesToTemperature(300*unit.kelvin, 6)
+    start = context.getState(getPositions=True).getPositions(asNumpy=True).value_in_unit(unit.nanometer)
+    if drudeMass is None:
+        with pytest.raises(openmm.OpenMMException, match='beyond twice the hard wall'):
+            integrator.step(500)
+        return
+    integrator.step(500)
+    final = context.getState(getPositions=True).getPositions(asNumpy=True).value_in_unit(unit.nanometer)
+    for body in bodies:
+        for i in body:
+            for j in body:
+                assert abs(np.linalg.norm(final[i] - final[j]) - np.linalg.norm(start[i] - start[j])) < 1e-10
+    assert 0 <= integrator.computeDrudeTemperature().value_in_unit(unit.kelvin) < 30
