@@ -77,6 +77,24 @@ def swm4ndp(numMolecules):
     return model.system, model.positions, bodies
 
 
+def boundContext(system, positions, bodies, integrator, platform=None, properties=None, seed=1):
+    """A Context (Reference by default) of the System with the bodies declared, at the positions, velocities at 300 K."""
+    for body in bodies:
+        integrator.addRigidBody(body)
+    context = openmm.Context(system, integrator, platform or openmm.Platform.getPlatformByName('Reference'),
+                             properties or {})
+    context.setPositions(positions)
+    context.setVelocitiesToTemperature(300*unit.kelvin, seed)
+    return context
+
+
+def assertRigid(bodies, start, end, tolerance):
+    for body in bodies:
+        before = np.linalg.norm(start[body][:, None] - start[body][None], axis=2)
+        after = np.linalg.norm(end[body][:, None] - end[body][None], axis=2)
+        assert np.max(np.abs(after - before)) < tolerance
+
+
 def swm4ndp_rigid_with_a_checkpoint_bit_for_bit(cls, platform, properties, rigidity):
     """8 SWM4-NDP waters (their M sites virtual) with the wall of real runs (0.02 nm), 300
     steps (Langevin 1 fs, Nose-Hoover 0.5 fs) with a checkpoint after 100: the 100 steps after
@@ -87,11 +105,7 @@ def swm4ndp_rigid_with_a_checkpoint_bit_for_bit(cls, platform, properties, rigid
     integrator.setMaxDrudeDistance(0.02*unit.nanometer)
     if cls is LANGEVIN:
         integrator.setRandomNumberSeed(4)
-    for body in bodies:
-        integrator.addRigidBody(body)
-    context = openmm.Context(system, integrator, platform, properties)
-    context.setPositions(positions)
-    context.setVelocitiesToTemperature(300*unit.kelvin, 2)
+    context = boundContext(system, positions, bodies, integrator, platform, properties, seed=2)
     # 6 per body and 3 per Drude particle, less the CMMotionRemover's 3.
     assert integrator.getNumDegreesOfFreedom() == 8*6 + 8*3 - 3
     heatBath = integrator.computeHeatBathEnergy if cls is NOSE_HOOVER else lambda: None
@@ -110,10 +124,7 @@ def swm4ndp_rigid_with_a_checkpoint_bit_for_bit(cls, platform, properties, rigid
     again = context.getState(getPositions=True).getPositions(asNumpy=True).value_in_unit(unit.nanometer)
     assert np.array_equal(straight, again)
     assert heatBath() == straightBath
-    for body in bodies:
-        for i in body:
-            for j in body:
-                assert abs(np.linalg.norm(again[i] - again[j]) - np.linalg.norm(start[i] - start[j])) < rigidity
+    assertRigid(bodies, start, again, rigidity)
     drude = [f for f in system.getForces() if isinstance(f, openmm.DrudeForce)][0]
     for k in range(drude.getNumParticles()):
         particle, core = drude.getParticleParameters(k)[:2]
@@ -210,11 +221,7 @@ def test_2fs_steps_need_a_heavier_drude_particle(drudeMass):
     integrator = make(LANGEVIN, 2*unit.femtoseconds)
     integrator.setMaxDrudeDistance(0.02*unit.nanometer)
     integrator.setRandomNumberSeed(5)
-    for body in bodies:
-        integrator.addRigidBody(body)
-    context = openmm.Context(system, integrator, openmm.Platform.getPlatformByName('Reference'))
-    context.setPositions(positions)
-    context.setVelocitiesToTemperature(300*unit.kelvin, 6)
+    context = boundContext(system, positions, bodies, integrator, seed=6)
     start = context.getState(getPositions=True).getPositions(asNumpy=True).value_in_unit(unit.nanometer)
     if drudeMass is None:
         with pytest.raises(openmm.OpenMMException, match='beyond twice the hard wall'):
@@ -222,8 +229,5 @@ def test_2fs_steps_need_a_heavier_drude_particle(drudeMass):
         return
     integrator.step(500)
     final = context.getState(getPositions=True).getPositions(asNumpy=True).value_in_unit(unit.nanometer)
-    for body in bodies:
-        for i in body:
-            for j in body:
-                assert abs(np.linalg.norm(final[i] - final[j]) - np.linalg.norm(start[i] - start[j])) < 1e-10
+    assertRigid(bodies, start, final, 1e-10)
     assert 0 <= integrator.computeDrudeTemperature().value_in_unit(unit.kelvin) < 30
