@@ -5,7 +5,8 @@
     validate-langevin       MRattleLangevinIntegrator against LangevinMiddle + SETTLE
     validate-equipartition  rigid water, translational against rotational temperature
     validate-thermostats    Nose-Hoover chain and CSVR on rigid water [--report-from CSV]
-    validate-drude          the Drude integrators against OpenMM's + SETTLE on SWM4-NDP (its table: results/drude.md)
+    validate-drude          the Drude integrators against OpenMM's + SETTLE on SWM4-NDP (results/drude.md), and
+                            the Langevin Drude temperature against the body friction (results/drude-friction.md)
     validate-minimization   RigidBodyMinimizer against LocalEnergyMinimizer (options of its own: --help)
 
 --quick: tiny runs written to a scratch folder (a smoke test); --only: some parts of a target.
@@ -21,7 +22,7 @@ HERE = os.path.dirname(os.path.abspath(__file__))
 ROOT = os.path.dirname(os.path.dirname(HERE))
 TARGETS = {"paper": ("accuracy", "cost", "sampling", "drift"),
            "validate-langevin": ("langevin",), "validate-equipartition": ("equipartition",),
-           "validate-thermostats": ("thermostats",), "validate-drude": ("drude",)}
+           "validate-thermostats": ("thermostats",), "validate-drude": ("drude", "friction")}
 
 
 def parse(argv):
@@ -125,9 +126,13 @@ def main(argv=None):
         from suite import equipartition
         md += equipartition.run(q, os.path.join(results_dir, "equipartition"), log)
 
-    if "drude" in parts:  # its own table, cited by docs/usage.md: results.md is left alone
+    if "drude" in parts or "friction" in parts:  # their own tables, cited by docs/usage.md: results.md is left alone
         from suite import drude
-        return drude.run(q, results_dir, log)
+        if "drude" in parts:
+            drude.run(q, results_dir, log)
+        if "friction" in parts:
+            drude.friction_scan(q, results_dir, log)
+        return 0
 
     if "thermostats" in parts:
         log("thermostats: Nose-Hoover chain and CSVR on rigid TIP3P water (canonical sampling, drift, diffusion)")

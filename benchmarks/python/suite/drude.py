@@ -20,6 +20,9 @@ COUPLING = {'Langevin': (1.0, 10.0), 'Nose-Hoover': (1.0, 10.0)}  # 1/ps: the bo
 FULL = dict(box=1.9, step=STEP, equilibrate=15000, settle=2000, nvt=8000, npt=8000, sample=20, replicas=4, batches=7,
             finer=[dict(step=STEP / 2, settle=1000, nvt=6000, sample=40, replicas=3),
                    dict(step=STEP / 4, settle=1200, nvt=4800, sample=40, replicas=3)])
+# The Langevin Drude T against the bodies' friction (1/ps; Drude 10/ps), at 0.5 fs: its own table, drude-friction.md
+FRICTION = dict(frictions=(0.2, 1.0, 5.0), equilibrate=6000, step=STEP / 2, settle=1000, nvt=3000, sample=20, replicas=3)
+QUICK_FRICTION = dict(frictions=(0.2, 5.0), equilibrate=200, step=STEP / 2, settle=100, nvt=100, sample=20, replicas=2)
 QUICK = dict(box=1.9, step=STEP, equilibrate=500, settle=200, nvt=200, npt=200, sample=20, replicas=2, batches=2,
              finer=[dict(step=STEP / 2, settle=200, nvt=200, sample=40, replicas=2),
                     dict(step=STEP / 4, settle=200, nvt=200, sample=40, replicas=2)])
@@ -34,11 +37,12 @@ def swm4ndp(box_nm):
     return system, model.positions, pairs, mrattle.rigidBodies(model.topology, system, atoms=['O', 'H1', 'H2'])
 
 
-def integrator(name, bodies, seed, step=STEP):
-    """The four integrators by name: (thermostat, plugin or not)."""
+def integrator(name, bodies, seed, step=STEP, coupling=None):
+    """The four integrators by name: (thermostat, plugin or not); coupling: (the bodies', the Drude particles') if not COUPLING's."""
     thermostat, plugin = name
     cls = getattr(mrattle if plugin else openmm, 'MRattle' * plugin + 'Drude%sIntegrator' % thermostat.replace('-', ''))
-    result = cls(TEMPERATURE, COUPLING[thermostat][0], DRUDE_T, COUPLING[thermostat][1], step)
+    gamma, drude_gamma = coupling or COUPLING[thermostat]
+    result = cls(TEMPERATURE, gamma, DRUDE_T, drude_gamma, step)
     result.setMaxDrudeDistance(WALL)
     if thermostat == 'Langevin':
         result.setRandomNumberSeed(seed)
@@ -97,7 +101,7 @@ def replica(name, model, start, seed, s, npt):
     """One replica's means: from the common start, new velocities (seed; drawn OpenMM's way for both sides: the
     plugin's setVelocitiesToTemperature gives the Drude particles the main temperature), its own equilibration."""
     system, pairs, bodies, temperatures = model
-    it = integrator(name, bodies, seed, s['step'])
+    it = integrator(name, bodies, seed, s['step'], s.get('coupling'))
     seed_barostat(system, seed)
     c = context(system, it, start[0], None, 'CPU', 1)
     c.setPeriodicBoxVectors(*start[1])
@@ -120,9 +124,9 @@ def replica(name, model, start, seed, s, npt):
     return {key: np.mean([r[key] for r in rows]) for key in rows[0]}
 
 
-def equilibrate(system, positions, steps, seed=1):
+def equilibrate(system, positions, steps, seed=1, coupling=None):
     """OpenMM's DrudeLangevin + SETTLE from positions (minimized first): the common start (positions, box)."""
-    it = integrator(('Langevin', False), [], seed)
+    it = integrator(('Langevin', False), [], seed, coupling=coupling)
     seed_barostat(system, seed)
     c = context(system, it, positions, None, 'CPU', 1)
     openmm.LocalEnergyMinimizer.minimize(c, 10.0, 500)
@@ -211,3 +215,38 @@ def run(quick, out, log):
     with open(os.path.join(out, 'drude.md'), 'w') as f:
         f.write('\n'.join(lines) + '\n')
     log('drude: wrote %s' % os.path.join(out, 'drude.md'))
+
+
+def friction_scan(quick, out, log):
+    """The Langevin pair's Drude temperature at 0.5 fs for several body frictions (Drude friction 10/ps, no
+    barostat): a gap that grows with the bodies' friction is the 300 K bath reaching the Drude motion."""
+    f = QUICK_FRICTION if quick else FRICTION
+    system, positions, pairs, bodies = swm4ndp(FULL['box'])
+    model = (system, pairs, bodies, Temperatures(system, pairs))
+    lines = ['# The Langevin Drude temperature against the bodies\' friction: SWM4-NDP water\n',
+             '`./benchmarks/run.sh validate-drude --only friction%s`, %s UTC, commit %s, %s. %d waters, 0.5 fs, 300 K, '
+             'Drude 1 K at 10/ps, maxDrudeDistance %g nm, CPU platform, 1 thread. For each body friction: a start after '
+             '%g ps of OpenMM\'s DrudeLangevin at that friction, then per integrator %d replicas of %g ps equilibration '
+             'and %g ps NVT (sampled every %g fs). Drude T by OpenMM\'s formula; DrudeLangevin\'s also shifted by h/2 '
+             '(the difference is to those). Means +- standard errors over the replicas.%s\n' % (
+                 ' --quick' if quick else '', datetime.datetime.utcnow().strftime('%Y-%m-%d %H:%M'),
+                 subprocess.run(['git', 'rev-parse', '--short', 'HEAD'], capture_output=True, text=True,
+                                cwd=os.path.dirname(__file__)).stdout.strip(), machine_description(), len(bodies),
+                 WALL, f['equilibrate'] * f['step'], f['replicas'], f['settle'] * f['step'], f['nvt'] * f['step'],
+                 f['sample'] * f['step'] * 1e3, ' A **quick** smoke run: it shows nothing.' if quick else ''),
+             '| body friction (1/ps) | M-RATTLE Drude T (K) | DrudeLangevin + SETTLE, kept (K) | shifted by h/2 (K) | '
+             'difference (K) | difference / combined SE |', '|---|---|---|---|---|---|']
+    for gamma in f['frictions']:
+        s = dict(f, coupling=(gamma, COUPLING['Langevin'][1]))
+        start = equilibrate(system, positions, f['equilibrate'], coupling=s['coupling'])
+        ours = [replica(('Langevin', True), model, start, 51 + r, s, False) for r in range(f['replicas'])]
+        theirs = [replica(('Langevin', False), model, start, 51 + r, s, False) for r in range(f['replicas'])]
+        (a, ea), (b, eb), (c, ec) = (mean_se(ours, 'T_drude'), mean_se(theirs, 'T_drude'),
+                                     mean_se(theirs, 'shifted_T_drude'))
+        lines.append('| %g | %.3f +- %.3f | %.3f +- %.3f | %.3f +- %.3f | %+.3f | %+.1f |' % (
+            gamma, a, ea, b, eb, c, ec, a - c, (a - c) / math.hypot(ea, ec)))
+        log('drude friction %g/ps done' % gamma)
+    os.makedirs(out, exist_ok=True)
+    with open(os.path.join(out, 'drude-friction.md'), 'w') as stream:
+        stream.write('\n'.join(lines) + '\n')
+    log('drude: wrote %s' % os.path.join(out, 'drude-friction.md'))
