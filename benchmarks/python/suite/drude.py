@@ -136,6 +136,17 @@ def equilibrate(system, positions, steps, seed=1, coupling=None):
     return state.getPositions(), state.getPeriodicBoxVectors()
 
 
+QUICK_NOTE = ' A **quick** smoke run: it shows nothing.'
+
+
+def run_stamp(quick):
+    """A table's run: the command's --quick, the time (UTC), the commit and the machine."""
+    commit = subprocess.run(['git', 'rev-parse', '--short', 'HEAD'], capture_output=True, text=True,
+                            cwd=os.path.dirname(__file__)).stdout.strip()
+    return (' --quick' if quick else '', datetime.datetime.utcnow().strftime('%Y-%m-%d %H:%M'), commit,
+            machine_description())
+
+
 def mean_se(replicas, key):
     return np.mean([r[key] for r in replicas]), np.std([r[key] for r in replicas], ddof=1) / math.sqrt(len(replicas))
 
@@ -185,11 +196,8 @@ def run(quick, out, log):
              'computeDrudeTemperature()) for both sides, from the velocities the integrators keep. Cost: median of %d '
              'interleaved batches '
              'of 100 steps.%s\n' % (
-                 ' --quick' if quick else '', datetime.datetime.utcnow().strftime('%Y-%m-%d %H:%M'),
-                 subprocess.run(['git', 'rev-parse', '--short', 'HEAD'], capture_output=True, text=True,
-                                cwd=os.path.dirname(__file__)).stdout.strip(), machine_description(), len(bodies),
-                 WALL, s['replicas'], s['equilibrate'] * STEP, s['settle'] * STEP, s['nvt'] * STEP, s['sample'],
-                 s['npt'] * STEP, s['batches'], ' A **quick** smoke run: it shows nothing.' if quick else '')]
+                 *run_stamp(quick), len(bodies), WALL, s['replicas'], s['equilibrate'] * STEP, s['settle'] * STEP,
+                 s['nvt'] * STEP, s['sample'], s['npt'] * STEP, s['batches'], QUICK_NOTE if quick else '')]
     for thermostat, (gamma, drude_gamma) in COUPLING.items():
         ours, theirs = means[(thermostat, True)], means[(thermostat, False)]
         lines += ['\n## %s (%g/ps, Drude %g/ps): MRattleDrude%sIntegrator against Drude%sIntegrator + SETTLE\n' % (
@@ -229,11 +237,9 @@ def friction_scan(quick, out, log):
              '%g ps of OpenMM\'s DrudeLangevin at that friction, then per integrator %d replicas of %g ps equilibration '
              'and %g ps NVT (sampled every %g fs). Drude T by OpenMM\'s formula; DrudeLangevin\'s also shifted by h/2 '
              '(the difference is to those). Means +- standard errors over the replicas.%s\n' % (
-                 ' --quick' if quick else '', datetime.datetime.utcnow().strftime('%Y-%m-%d %H:%M'),
-                 subprocess.run(['git', 'rev-parse', '--short', 'HEAD'], capture_output=True, text=True,
-                                cwd=os.path.dirname(__file__)).stdout.strip(), machine_description(), len(bodies),
-                 WALL, f['equilibrate'] * f['step'], f['replicas'], f['settle'] * f['step'], f['nvt'] * f['step'],
-                 f['sample'] * f['step'] * 1e3, ' A **quick** smoke run: it shows nothing.' if quick else ''),
+                 *run_stamp(quick), len(bodies), WALL, f['equilibrate'] * f['step'], f['replicas'],
+                 f['settle'] * f['step'], f['nvt'] * f['step'], f['sample'] * f['step'] * 1e3,
+                 QUICK_NOTE if quick else ''),
              '| body friction (1/ps) | M-RATTLE Drude T (K) | DrudeLangevin + SETTLE, kept (K) | shifted by h/2 (K) | '
              'difference (K) | difference / combined SE |', '|---|---|---|---|---|---|']
     for gamma in f['frictions']:
