@@ -12,6 +12,13 @@ import openmm
 from openmm import unit
 
 
+def drudePairs(system):
+    """(Drude particle, core) of every pair of the System's DrudeForces (none where OpenMM has no Drude plugin)."""
+    drudeForce = getattr(openmm, 'DrudeForce', None)
+    return [tuple(force.getParticleParameters(k)[:2]) for force in system.getForces()
+            if drudeForce is not None and isinstance(force, drudeForce) for k in range(force.getNumParticles())]
+
+
 def setDrudeMass(system, mass):
     """Give every Drude particle of the System's DrudeForces this mass (amu; a Quantity of mass
     or a number), taking the difference from its core so that each pair's mass is unchanged.
@@ -21,9 +28,7 @@ def setDrudeMass(system, mass):
     value = mass.value_in_unit(unit.amu) if unit.is_quantity(mass) else float(mass)
     if not (math.isfinite(value) and value > 0):
         raise ValueError('setDrudeMass: the mass must be a finite number > 0 amu, got %r' % (mass,))
-    drudeForce = getattr(openmm, 'DrudeForce', None)
-    pairs = [force.getParticleParameters(k)[:2] for force in system.getForces()
-             if drudeForce is not None and isinstance(force, drudeForce) for k in range(force.getNumParticles())]
+    pairs = drudePairs(system)
     if not pairs:
         raise ValueError('setDrudeMass: the System has no DrudeForce with Drude particles')
     masses = {}

@@ -1,8 +1,9 @@
 """Choosing rigid bodies from an OpenMM Topology: all waters, residues by name or by a function,
 atoms within them (by name per residue, or by a function of atoms), one body per residue or
 bodies that span several residues (a domain); the rest of the System stays flexible."""
-import openmm
 from openmm import unit
+
+from .drude import drudePairs
 
 # Residue names OpenMM's force fields and common PDB files use for water.
 WATER_NAMES = frozenset(['HOH', 'WAT', 'SOL', 'H2O', 'TIP3', 'TIP4', 'TIP5', 'T3P', 'T4P', 'T5P', 'SPC', 'SPCE'])
@@ -113,9 +114,7 @@ def rigidBodies(topology, system, select='water', atoms=None, group='residue'):
 
 def _drudeParticles(system):
     """The Drude particles of the System's DrudeForces (none where OpenMM has no Drude plugin)."""
-    drudeForce = getattr(openmm, 'DrudeForce', None)
-    return {force.getParticleParameters(k)[0] for force in system.getForces()
-            if drudeForce is not None and isinstance(force, drudeForce) for k in range(force.getNumParticles())}
+    return {drude for drude, core in drudePairs(system)}
 
 
 def declareRigidBodies(integrator, topology, system, select='water', atoms=None, group='residue'):
