@@ -803,18 +803,25 @@ TEST(DrudeReordering, DrudeGroupsFollowTheDevicesReorderingsAsOnReference) {
     // the wall the pairs) and a wall that acts: 260 steps of 0.25 fs from the same state on
     // each device platform in double precision end close to Reference (2e-8 nm through pocl),
     // the Drude particles within the wall and the bodies rigid. One device Context a platform.
+    // Three 75-atom polarizable bodies (Drude groups of 83, a work group each) are placed
+    // against OpenMM's Hilbert order, so that through pocl a reordering moves all 249 of their
+    // particles and they take the large-group kernels through it too.
     //
     // What this can and cannot catch: OpenMM moves only whole identical molecules (its
     // molecules join the bodies, CommonRigidBodyState's BodyForceInfo, and each Drude pair),
     // and a Drude group keeps nothing of its own on the device, so Drude lists left in the old
     // order only relabel the groups: skipping the upload of drudePairAtoms (or of every Drude
     // list) at a reordering passes, bit for bit. A list that pairs a group with another's
-    // Drude pairs (drudePairAtoms rotated by one pair at each reordering) fails: 0.04 nm from
-    // Reference and bodies off by 1e-4 nm. Then a Drude particle set 3.5 walls from its core
+    // Drude pairs (drudePairAtoms rotated by one pair at each reordering) fails: 0.007 nm from
+    // Reference. Then a Drude particle set 3.5 walls from its core
     // fails the next step, and the message names it and its core by System index.
-    const double wall = 0.003, cutoff = 0.55;
+    const double wall = 0.004, cutoff = 0.55;
     const int steps = 260;
     DrudeSystem d = drudeWaters(22, 5, 0.4, cutoff);
+    const int firstBlobAtom = d.system.getNumParticles();
+    addPolarizableBlobs(d, 3, 75);
+    for (size_t i = firstBlobAtom; i < d.positions.size(); i++)
+        d.positions[i] = Vec3(9.0 - d.positions[i][0], d.positions[i][1] + 0.6, d.positions[i][2] + 0.6);
     auto make = [&](double maxDistance) {
         std::unique_ptr<RigidBodyIntegrator> integrator =
             DrudeView::make(noseHooverKind, 300, 10.0, 50, 20.0, 0.00025);
