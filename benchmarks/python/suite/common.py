@@ -3,6 +3,7 @@ block statistics, CSV files and figures."""
 import csv
 import math
 import os
+import subprocess
 import time
 
 import numpy as np
@@ -157,6 +158,13 @@ def machine_description():
     except (OSError, StopIteration):
         model = "unknown CPU"
     return "%s, %d cores visible, OpenMM %s" % (model, os.cpu_count() or 0, openmm.Platform.getOpenMMVersion())
+
+
+def git_commit():
+    """The checkout's commit (short), which every results stamp names; "unknown" outside a git checkout."""
+    done = subprocess.run(["git", "rev-parse", "--short", "HEAD"], capture_output=True, text=True,
+                          cwd=os.path.dirname(os.path.abspath(__file__)))
+    return done.stdout.strip() or "unknown"
 
 
 def interleaved(integrators, steps, batches):

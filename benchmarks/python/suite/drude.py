@@ -11,7 +11,7 @@ import openmm
 from openmm import unit
 
 import mrattle
-from .common import KB, TEMPERATURE, context, density, interleaved, machine_description, masses as masses_of, removes_cm
+from .common import KB, TEMPERATURE, context, density, git_commit, interleaved, machine_description, masses as masses_of, removes_cm
 
 STEP, DRUDE_T, WALL = 0.001, 1.0, 0.02  # ps, K, nm: OpenMM's tests' settings and its default hard wall
 COUPLING = {'Langevin': (1.0, 10.0), 'Nose-Hoover': (1.0, 10.0)}  # 1/ps: the bodies', the Drude particles'
@@ -141,9 +141,7 @@ QUICK_NOTE = ' A **quick** smoke run: it shows nothing.'
 
 def run_stamp(quick):
     """A table's run: the command's --quick, the time (UTC), the commit and the machine."""
-    commit = subprocess.run(['git', 'rev-parse', '--short', 'HEAD'], capture_output=True, text=True,
-                            cwd=os.path.dirname(__file__)).stdout.strip()
-    return (' --quick' if quick else '', datetime.datetime.utcnow().strftime('%Y-%m-%d %H:%M'), commit,
+    return (' --quick' if quick else '', datetime.datetime.utcnow().strftime('%Y-%m-%d %H:%M'), git_commit(),
             machine_description())
 
 
