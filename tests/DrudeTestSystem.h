@@ -199,22 +199,6 @@ inline double distance(const Vec3& a, const Vec3& b) {
     return std::sqrt(d.dot(d));
 }
 
-/** Mean and standard error of a series, from the means of 20 blocks. */
-inline std::pair<double, double> blockMean(const vector<double>& series) {
-    const int blocks = 20, length = series.size() / blocks;
-    vector<double> means(blocks, 0.0);
-    for (int b = 0; b < blocks; b++) {
-        for (int k = 0; k < length; k++)
-            means[b] += series[b * length + k];
-        means[b] /= length;
-    }
-    double mean = 0, variance = 0;
-    for (double m : means)
-        mean += m / blocks;
-    for (double m : means)
-        variance += (m - mean) * (m - mean) / (blocks - 1);
-    return {mean, std::sqrt(variance / blocks)};
-}
 
 } // namespace Drude
 } // namespace MRattleTest

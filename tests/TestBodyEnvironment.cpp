@@ -200,15 +200,15 @@ TEST_P(BodyEnvironment, VirtualSitesFollowTheirParents) {
 namespace {
 
 struct ThermostatRun {
-    double rigidity, stretchRate, volumeChange, meanTemperature, temperatureSpread;
+    double rigidity, stretchRate, volumeChange, meanTemperature, temperatureError;
 };
 
 /**
  * 64 rigid waters in a periodic box at about liquid density, started at 150 K, with an
  * AndersenThermostat at 300 K and optionally a MonteCarloBarostat; 2000 steps with the
  * config's platform and integrator. The full length on every config: the temperature is a
- * statistical check (the thermostat's seed changes from run to run), and a shorter run
- * would loosen it; about 1.9 s on Reference, 0.2 s on CPU.
+ * statistical check (its error from 15 block means of 5 samples, 200 fs each), and a shorter run would
+ * loosen it; about 1.9 s on Reference, 0.2 s on CPU.
  * constrainWaters adds the O-H, O-H, H-H constraints (ignored by the integrator): they
  * make OpenMM's thermostat randomize each water as a whole.
  */
@@ -254,12 +254,11 @@ ThermostatRun runThermostat(const Config& config, bool constrainWaters, bool bar
     Vec3 a, b, box;
     context.getState(0).getPeriodicBoxVectors(a, b, box);
     result.volumeChange = a[0] * b[1] * box[2] / volume0 - 1;
-    result.meanTemperature = mean(temperatures);
-    result.temperatureSpread = standardDeviation(temperatures);
+    std::tie(result.meanTemperature, result.temperatureError) = blockMean(temperatures, 15);
     std::cout << "water box, Andersen" << (barostat ? " and barostat" : "")
               << (constrainWaters ? ", constrained waters" : ", bonded waters") << ": rigidity " << result.rigidity
               << " nm, stretch rate " << result.stretchRate << " nm/ps, relative volume change " << result.volumeChange
-              << ", mean temperature " << result.meanTemperature << " K (std " << result.temperatureSpread << ")"
+              << ", mean temperature " << result.meanTemperature << " +- " << result.temperatureError << " K"
               << std::endl;
     return result;
 }
@@ -271,9 +270,9 @@ TEST_P(BodyEnvironment, ThermostatAndBarostatKeepBodiesRigid) {
     EXPECT_LT(run.rigidity, 1e-10);
     EXPECT_LT(run.stretchRate, 1e-10);
     EXPECT_GT(std::fabs(run.volumeChange), 1e-4);  // the barostat acted
-    // The thermostat brought it from 150 K to 300 K: 75 samples of a 384-DOF system
-    // (instantaneous std about 22 K, correlated over a few samples).
-    EXPECT_NEAR(300, run.meanTemperature, 20);
+    // The thermostat brought it from 150 K to 300 K (75 samples of a 384-DOF system).
+    EXPECT_NEAR(300, run.meanTemperature, 4 * run.temperatureError);
+    EXPECT_LT(run.temperatureError, 8.0);
 }
 
 /*
@@ -285,7 +284,8 @@ TEST_P(BodyEnvironment, ThermostatAndBarostatKeepBodiesRigid) {
 TEST_P(BodyEnvironment, ThermostatReachesTemperatureWithBondedBodies) {
     ThermostatRun run = runThermostat(GetParam(), false, false);
     EXPECT_LT(run.rigidity, 1e-10);
-    EXPECT_NEAR(300, run.meanTemperature, 20);
+    EXPECT_NEAR(300, run.meanTemperature, 4 * run.temperatureError);
+    EXPECT_LT(run.temperatureError, 8.0);
 }
 
 TEST_P(BodyEnvironment, ForcesOutsideIntegrationGroupsHaveNoEffect) {

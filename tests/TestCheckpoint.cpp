@@ -233,7 +233,8 @@ TEST_P(Checkpoint, ContinuedRunWithThermostatAndMotionRemoverIsBitwiseIdentical)
 TEST_P(Checkpoint, WithACutoffOnlyReferenceRestartsAreExact) {
     // The CPU and OpenCL platforms keep neighbour lists (and more) built at earlier steps,
     // so with a cutoff a continued run can differ at round-off; measured against OpenMM's
-    // own VerletIntegrator on the same System and platform.
+    // own VerletIntegrator on the same System and platform, whose restart differs likewise
+    // (the plugin's within 3x of it, measured): within 10x of it, or 1e-10 nm where it is exact.
     TestRun run(GetParam(), WithCutoff);
     const bool reference = GetParam().platform == "Reference";
     double difference = continuedRunDifference(run, reference);
@@ -252,7 +253,7 @@ TEST_P(Checkpoint, WithACutoffOnlyReferenceRestartsAreExact) {
         std::cout << GetParam().platform << ", cutoff 0.8 nm, " << StepsAfter
                   << " steps after a checkpoint: continued run differs by " << difference
                   << " nm (VerletIntegrator: " << verletDifference << " nm)" << std::endl;
-        EXPECT_LT(difference, 1e-5);
+        EXPECT_LT(difference, std::max(10 * verletDifference, 1e-10));
     }
 }
 

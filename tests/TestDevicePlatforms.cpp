@@ -200,8 +200,10 @@ TEST_P(DevicePlatform, MixedPrecisionConservesEnergyLikeReference) {
               << " starts: Reference " << reference << " +- " << referenceError << ", " << GetParam() << " mixed " << mixed << " +- "
               << mixedError << " kJ/mol; ratio " << ratio << " +- " << ratioError << std::endl;
     EXPECT_GT(reference, 0.0);
-    // Within 10% of Reference's, or within what the runs can resolve (3 standard errors).
+    // Within 10% of Reference's, or within what the runs can resolve (3 standard errors),
+    // which must be enough to see a mixed-precision step twice as noisy (0.25 measured).
     EXPECT_LT(std::fabs(ratio - 1), std::max(0.1, 3 * ratioError));
+    EXPECT_LT(ratioError, 0.33);
 }
 
 TEST_P(DevicePlatform, SinglePrecisionRunsAndIsMeasured) {
@@ -218,7 +220,9 @@ TEST_P(DevicePlatform, SinglePrecisionRunsAndIsMeasured) {
               << " kJ/mol" << std::endl;
     for (double energy : energies)
         ASSERT_TRUE(std::isfinite(energy));
-    EXPECT_LT(rigidity, 1e-3);  // single precision: documented as measured, bounded loosely here
+    // Single precision: 4.5e-7 nm and 0.56 kJ/mol measured (docs/platforms.md); 10x as a guard.
+    EXPECT_LT(rigidity, 5e-6);
+    EXPECT_LT(standardDeviation(energies), 5.6);
 }
 
 TEST_P(DevicePlatform, CheckpointRestartIsBitForBit) {

@@ -173,6 +173,7 @@ TEST_P(Faults, ARefusedCheckpointIsRecoveredByReinitializeAndNothingCrashesMeanw
     vector<size_t> offsets;
     for (size_t back = 4; back < std::min<size_t>(ours, 2600); back += 37)
         offsets.push_back(ours - back);
+    int exercised = 0;  // damages that reached the checks below
     for (size_t offset : offsets) {
         string damaged = good;
         damaged.insert(offset, "junk");
@@ -187,6 +188,7 @@ TEST_P(Faults, ARefusedCheckpointIsRecoveredByReinitializeAndNothingCrashesMeanw
         if (message.find("OpenMM had already loaded") == string::npos)
             continue;  // OpenMM's own checks refused it, before overwriting anything
         EXPECT_NE(string::npos, message.find("call Context::reinitialize()")) << message;
+        exercised++;
         context->setState(saved);
         const string refusal = messageOf([&] { integrator->step(5); });
         EXPECT_NE(string::npos, refusal.find("reinitialize()")) << refusal;
@@ -202,6 +204,7 @@ TEST_P(Faults, ARefusedCheckpointIsRecoveredByReinitializeAndNothingCrashesMeanw
         integrator->step(5);
         EXPECT_TRUE(allFinite(snapshot(*context).velocities)) << offset;
     }
+    EXPECT_GT(exercised, 0) << "no damage reached the refusal this test is about";
 }
 
 // Item 5.

@@ -524,6 +524,31 @@ double linearSlope(const vector<double>& values) {
     return covariance / variance;
 }
 
+std::pair<double, double> blockMean(const vector<double>& series, int blocks) {
+    const size_t length = series.size() / blocks;
+    vector<double> means(blocks, 0.0);
+    for (int b = 0; b < blocks; b++)
+        means[b] = mean(vector<double>(series.begin() + b * length, series.begin() + (b + 1) * length));
+    return {mean(means), standardDeviation(means) / std::sqrt(blocks - 1.0)};  // the means' sample variance / blocks
+}
+
+Drift driftOfBlockMeans(const vector<double>& values, int blocks) {
+    const size_t size = values.size() / blocks;
+    vector<double> means(blocks);
+    for (int b = 0; b < blocks; b++)
+        means[b] = mean(vector<double>(values.begin() + b * size, values.begin() + (b + 1) * size));
+    const double slope = linearSlope(means), average = mean(means), middle = 0.5 * (blocks - 1);
+    double residuals = 0, spread = 0;
+    for (int b = 0; b < blocks; b++) {
+        const double r = means[b] - average - slope * (b - middle);
+        residuals += r * r;
+        spread += (b - middle) * (b - middle);
+    }
+    // Per block, then over the series' length (blocks * size samples).
+    const double slopeError = std::sqrt(residuals / (blocks - 2) / spread);
+    return {slope * blocks, slopeError * blocks};
+}
+
 std::string toXml(const Integrator& integrator) {
     std::stringstream stream;
     XmlSerializer::serialize<Integrator>(&integrator, "Integrator", stream);

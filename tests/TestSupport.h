@@ -8,6 +8,7 @@
 #include <functional>
 #include <memory>
 #include <string>
+#include <utility>
 #include <vector>
 
 namespace MRattleTest {
@@ -250,6 +251,14 @@ double mean(const std::vector<double>& values);
 double standardDeviation(const std::vector<double>& values);
 /** Slope of the least-squares line through (i, values[i]), per sample. */
 double linearSlope(const std::vector<double>& values);
+/** Mean and standard error of a series, from the means of `blocks` equal blocks. */
+std::pair<double, double> blockMean(const std::vector<double>& series, int blocks = 20);
+/** A series' change over its length (the line through its block means) and that change's standard error. */
+struct Drift {
+    double change, error;
+};
+/** The least-squares line through the means of `blocks` equal blocks; its error from their scatter about it. */
+Drift driftOfBlockMeans(const std::vector<double>& values, int blocks = 10);
 
 } // namespace MRattleTest
 

@@ -93,7 +93,15 @@ def test_states_with_or_without_parameters_set_into_integrators_without_variable
         for state in (withParameters(context), context.getState(getPositions=True, getVelocities=True),
                       withParameters(verlet)):
             context.setState(state)
+            # Taken as given: a State's bodies are rigid (the Verlet Context's positions are the
+            # model's, its velocities zero), so positions and velocities are kept bit for bit.
+            now = context.getState(getPositions=True, getVelocities=True)
+            for get in ('getPositions', 'getVelocities'):
+                assert np.array_equal(getattr(now, get)(asNumpy=True), getattr(state, get)(asNumpy=True)), (cls, get)
+            assert now.getStepCount() == state.getStepCount()
             integrator.step(2)
+            assert context.getState().getStepCount() == state.getStepCount() + 2
+            assert np.all(np.isfinite(context.getState(getPositions=True).getPositions(asNumpy=True)))
 
 
 def runReplicaExchange(cls, temperatures, iterations, stepsPerIteration, seed):
