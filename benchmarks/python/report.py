@@ -21,8 +21,9 @@ def header(quick):
 def write(path, md, command, minutes):
     """Write results.md: the run's own sections, stamped with the run, replace theirs in the file (or
     start it); the other sections keep their runs' numbers and stamps. md begins with header()."""
+    started = datetime.datetime.utcnow() - datetime.timedelta(minutes=minutes)
     stamp = "*From `./benchmarks/run.sh %s`, %s UTC (%.1f minutes), commit %s, %s; M-RATTLE plugin %s.*\n" % (
-        command, datetime.datetime.utcnow().strftime("%Y-%m-%d %H:%M"), minutes, common.git_commit(),
+        command, started.strftime("%Y-%m-%d %H:%M"), minutes, common.git_commit(),
         common.machine_description(), mrattle.__version__)
     existing = ""
     if os.path.exists(path):

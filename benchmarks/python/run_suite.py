@@ -48,7 +48,7 @@ def main(argv=None):
     args = parse(argv)
     sys.path[:0] = [os.path.join(args.build, "python"), HERE]
     from suite import accuracy, cost, langevin, long_drift, sampling
-    from suite.common import read_csv, write_csv
+    from suite.common import git_commit, read_csv, write_csv
     import report
 
     out = args.out or (os.path.join(args.build, "results-quick") if args.quick else os.path.join(ROOT, "docs"))
@@ -56,6 +56,7 @@ def main(argv=None):
     # The paper's rows go to the build (docs/results/ holds what the documents cite), or beside the report with --out.
     rows_dir = results_dir if args.out or args.quick else os.path.join(args.build, "results")
     os.makedirs(results_dir, exist_ok=True)
+    git_commit()  # the commit the run starts at, for its stamps
     all_parts = TARGETS[args.target]
     parts = set(args.only.split(",")) if args.only else set(all_parts)
     started = time.time()

@@ -1,6 +1,7 @@
 """Shared pieces of the benchmark suite: integrators by name, NVE runs, test molecules, rigid water,
 block statistics, CSV files and figures."""
 import csv
+import functools
 import math
 import os
 import subprocess
@@ -160,8 +161,10 @@ def machine_description():
     return "%s, %d cores visible, OpenMM %s" % (model, os.cpu_count() or 0, openmm.Platform.getOpenMMVersion())
 
 
+@functools.lru_cache(maxsize=None)
 def git_commit():
-    """The checkout's commit (short), which every results stamp names; "unknown" outside a git checkout."""
+    """The checkout's commit (short) at the first call (a run makes it at its start), which every results
+    stamp names; "unknown" outside a git checkout."""
     done = subprocess.run(["git", "rev-parse", "--short", "HEAD"], capture_output=True, text=True,
                           cwd=os.path.dirname(os.path.abspath(__file__)))
     return done.stdout.strip() or "unknown"
