@@ -164,3 +164,12 @@ def test_every_method_counts_degrees_of_freedom_with_the_package():
         run = common.nve_run(system, positions, velocities, method, 0.001, 0.002, 0.001, "Reference", bodies)
         assert run["failure"] is None
         assert run["dof"] == 6*8 == mrattle.degreesOfFreedom(run["context"])
+
+
+def test_stamps_name_the_commit_or_unknown_without_git(monkeypatch):
+    # OpenMM 8's leg tests a `git archive` copy in a root without git: the stamp says "unknown", the run goes on.
+    from suite import common
+    common.git_commit.cache_clear()
+    monkeypatch.setenv("PATH", "/nonexistent")
+    assert common.git_commit() == "unknown"
+    common.git_commit.cache_clear()

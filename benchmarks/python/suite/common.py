@@ -164,9 +164,12 @@ def machine_description():
 @functools.lru_cache(maxsize=None)
 def git_commit():
     """The checkout's commit (short) at the first call (a run makes it at its start), which every results
-    stamp names; "unknown" outside a git checkout."""
-    done = subprocess.run(["git", "rev-parse", "--short", "HEAD"], capture_output=True, text=True,
-                          cwd=os.path.dirname(os.path.abspath(__file__)))
+    stamp names; "unknown" outside a git checkout or without git (a `git archive` copy, as in scripts/test-openmm8.sh)."""
+    try:
+        done = subprocess.run(["git", "rev-parse", "--short", "HEAD"], capture_output=True, text=True,
+                              cwd=os.path.dirname(os.path.abspath(__file__)))
+    except OSError:
+        return "unknown"
     return done.stdout.strip() or "unknown"
 
 
