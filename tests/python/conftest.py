@@ -1,7 +1,9 @@
 """Shared fixtures of the Python tests. Run through ctest (Python.<file>), which puts the
 build tree's package on PYTHONPATH."""
+import math
 import os
 
+import numpy as np
 import openmm
 import pytest
 
@@ -64,6 +66,11 @@ def platformProperties(platform):
     if platform.getName() == 'CPU':
         return {'Threads': '1'}
     return {'Precision': 'double'} if platform.getName() in mrattle.DEVICE_PLATFORMS else {}
+
+
+def meanAndError(values):
+    """The mean of independent values and its standard error."""
+    return np.mean(values), np.std(values, ddof=1)/math.sqrt(len(values))
 
 
 def makeContext(system, integrator, platform, positions, velocities=None):

@@ -11,6 +11,7 @@ from openmm import app, unit
 
 import mrattle
 from mrattle.reporters import DRUDE_INTEGRATORS, HEAT_BATH_INTEGRATORS
+from conftest import meanAndError
 
 # The thermostats constructed as (temperature, collisionFrequency, stepSize): the Drude ones
 # (OpenMM's Drude integrators' constructors) have tests of their own.
@@ -163,7 +164,7 @@ def test_langevin_temperature_past_reorderings(devicePlatform):
             integrator.step(25)
             temperatures.append(integrator.computeSystemTemperature().value_in_unit(unit.kelvin))
         means.append(np.mean(temperatures))
-    mean, error = np.mean(means), np.std(means, ddof=1)/np.sqrt(len(means))
+    mean, error = meanAndError(means)
     assert abs(mean - 300) < 9.92*error, (means, mean, error)
 
 

@@ -8,6 +8,7 @@ import pytest
 from openmm import app, unit
 
 import mrattle
+from conftest import meanAndError
 
 DATA = os.path.join(os.path.dirname(app.__file__), 'data')
 
@@ -127,7 +128,7 @@ def test_villin_with_rigid_water_conserves_energy_like_verlet_with_settle_and_cc
     context.setVelocitiesToTemperature(300*unit.kelvin, 1)
     thermalize.step(200)
     starts = []
-    for s in range(3):
+    for _ in range(3):
         thermalize.step(100)
         starts.append(context.getState(getPositions=True, getVelocities=True))
     del context
@@ -163,13 +164,13 @@ def test_villin_with_rigid_water_conserves_energy_like_verlet_with_settle_and_cc
         for h in (1, 2):
             logRatios.append(np.log(rattle[h]/fluctuation('Verlet', h, start)))
         logGrowth.append(np.log(rattle[2]/rattle[1]))
-    mean, error = np.mean(logRatios), np.std(logRatios, ddof=1)/np.sqrt(len(logRatios))
+    mean, error = meanAndError(logRatios)
     print(f'fluctuation ratio M-RATTLE/Verlet: {np.exp(mean):.3f} (log ratio {mean:.3f} +- {error:.3f}, '
           f'{len(logRatios)} runs)')
-    assert error < np.log(1.25), logRatios  # resolves a 25% difference
+    assert error < np.log(1.25), logRatios  # the mean ratio known to 25%
     assert abs(mean) < max(4*error, np.log(1.1)), logRatios
     # Twice the step, larger fluctuations (about 4x: the error is O(h^2)).
-    growth, growthError = np.mean(logGrowth), np.std(logGrowth, ddof=1)/np.sqrt(len(logGrowth))
+    growth, growthError = meanAndError(logGrowth)
     assert growth - 4*growthError > 0, logGrowth
 
 
