@@ -49,7 +49,8 @@ def splice_sections(existing, preamble, regenerated, stamp):
     new = [(title, _stamped(body, stamp)) for title, body in new]
     titles = [t for t, _ in old]
     merged = [dict(new).get(t, body) for t, body in old] + [body for t, body in new if t not in titles]
-    return preamble.strip("\n") + "\n" + "".join(merged).rstrip("\n") + "\n"
+    # One blank line before every heading, whatever the spliced section ended with.
+    return preamble.strip("\n") + "\n" + "\n".join(body.rstrip("\n") for body in merged) + "\n"
 
 
 def _stamped(body, stamp):
